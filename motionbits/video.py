@@ -1,0 +1,152 @@
+"""Reading frames from videos, image folders and arrays, with clear errors on bad input."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Iterable, Iterator, Union
+
+import cv2
+import numpy as np
+from PIL import Image
+
+__all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "IMAGE_SUFFIXES"]
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+
+FrameSource = Union[str, os.PathLike, np.ndarray, Iterable[np.ndarray]]
+
+
+def as_rgb_frame(frame: np.ndarray, *, name: str = "frame") -> np.ndarray:
+    """Validate one frame and return it as a contiguous (H, W, 3) uint8 RGB array.
+
+    Accepted: (H, W, 3) uint8 RGB; (H, W) or (H, W, 1) uint8 grayscale (replicated to
+    three channels); (H, W, 4) uint8 RGBA (alpha dropped). Anything else raises
+    ``ValueError`` / ``TypeError`` saying what was wrong.
+    """
+    if not isinstance(frame, np.ndarray):
+        raise TypeError(f"{name} must be a numpy array, got {type(frame).__name__}")
+    if frame.dtype != np.uint8:
+        hint = (
+            " (float images: np.clip(img * 255, 0, 255).astype(np.uint8))"
+            if np.issubdtype(frame.dtype, np.floating) else ""
+        )
+        raise TypeError(f"{name} must be uint8 RGB, got dtype {frame.dtype}{hint}")
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        frame = frame[..., 0]
+    if frame.ndim == 2:
+        frame = np.repeat(frame[..., None], 3, axis=2)
+    elif frame.ndim == 3 and frame.shape[2] == 4:
+        frame = frame[..., :3]
+    if frame.ndim != 3 or frame.shape[2] != 3:
+        raise ValueError(
+            f"{name} must have shape (H, W, 3) (RGB), (H, W) (grayscale) or (H, W, 4) (RGBA); "
+            f"got {frame.shape}"
+        )
+    if frame.shape[0] < 8 or frame.shape[1] < 8:
+        raise ValueError(f"{name} is too small to segment: {frame.shape[1]}x{frame.shape[0]} pixels")
+    return np.ascontiguousarray(frame)
+
+
+def _iter_video_file(path: Path) -> Iterator[np.ndarray]:
+    cap = cv2.VideoCapture(str(path))
+    if not cap.isOpened():
+        raise ValueError(f"could not open {path} as a video (unsupported codec or corrupt file)")
+    try:
+        n = 0
+        while True:
+            ok, bgr = cap.read()
+            if not ok:
+                break
+            n += 1
+            yield cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+        if n == 0:
+            raise ValueError(f"{path} contains no decodable frames (empty or corrupt video)")
+    finally:
+        cap.release()
+
+
+def _image_files(folder: Path) -> list[Path]:
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    if not files:
+        raise ValueError(f"folder {folder} contains no images ({', '.join(IMAGE_SUFFIXES)})")
+    return files
+
+
+def _read_image(path: Path) -> np.ndarray:
+    try:
+        with Image.open(path) as im:
+            return np.asarray(im.convert("RGB"))
+    except Exception as exc:  # PIL raises several types for corrupt files
+        raise ValueError(f"could not read image {path}: {exc}") from exc
+
+
+def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
+    """Yield (H, W, 3) uint8 RGB frames from a video file, an image folder or arrays.
+
+    Args:
+        source: path to a video file (anything OpenCV/FFmpeg decodes) or to a folder of
+            images (sorted by name); a (T, H, W, 3) / (T, H, W) uint8 array; or an iterable
+            of (H, W, 3) frames.
+
+    Raises:
+        FileNotFoundError: the path does not exist.
+        ValueError: the video or folder holds no readable frame, or a frame is malformed.
+        TypeError: the source or a frame has the wrong type.
+    """
+    if isinstance(source, (str, os.PathLike)):
+        path = Path(source)
+        if not path.exists():
+            raise FileNotFoundError(f"input not found: {path}")
+        if path.is_dir():
+            for i, f in enumerate(_image_files(path)):
+                yield as_rgb_frame(_read_image(f), name=f"frame {i} ({f.name})")
+            return
+        if path.suffix.lower() in IMAGE_SUFFIXES:
+            yield as_rgb_frame(_read_image(path), name=str(path))
+            return
+        for i, frame in enumerate(_iter_video_file(path)):
+            yield as_rgb_frame(frame, name=f"frame {i} of {path.name}")
+        return
+    if isinstance(source, np.ndarray):
+        if source.ndim not in (3, 4):
+            raise ValueError(
+                f"an array of frames must have shape (T, H, W, 3) or (T, H, W); got {source.shape}"
+            )
+        if source.shape[0] == 0:
+            raise ValueError("the array of frames is empty (T = 0)")
+        for i in range(source.shape[0]):
+            yield as_rgb_frame(source[i], name=f"frame {i}")
+        return
+    if isinstance(source, Iterable):
+        n = 0
+        for i, frame in enumerate(source):
+            n += 1
+            yield as_rgb_frame(frame, name=f"frame {i}")
+        if n == 0:
+            raise ValueError("the frame iterable is empty")
+        return
+    raise TypeError(
+        f"unsupported frame source of type {type(source).__name__}: pass a path, an array or "
+        "an iterable of frames"
+    )
+
+
+def count_frames(source: FrameSource) -> int | None:
+    """Number of frames in ``source`` if known cheaply, else ``None`` (for progress bars)."""
+    if isinstance(source, np.ndarray):
+        return int(source.shape[0]) if source.ndim in (3, 4) else None
+    if isinstance(source, (list, tuple)):
+        return len(source)
+    if isinstance(source, (str, os.PathLike)):
+        path = Path(source)
+        if path.is_dir():
+            return sum(1 for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        if path.is_file() and path.suffix.lower() not in IMAGE_SUFFIXES:
+            cap = cv2.VideoCapture(str(path))
+            n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
+            cap.release()
+            return n or None
+        if path.is_file():
+            return 1
+    return None
