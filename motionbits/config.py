@@ -47,6 +47,7 @@ class MotionBitsConfig:
     # --- pixel masks and identities (ours) ---
     min_cluster_nodes: int = 4  # clusters with fewer nodes are noise
     prior_bonus: float = 0.35  # px: residual credit for keeping last frame's label
+    photo_weight: float = 0.1  # px of mask cost per grey level of photometric residual
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
 
     def __post_init__(self) -> None:
@@ -68,6 +69,7 @@ class MotionBitsConfig:
             "move_threshold": self.move_threshold > 0,
             "min_cluster_nodes": self.min_cluster_nodes >= 1,
             "prior_bonus": self.prior_bonus >= 0,
+            "photo_weight": self.photo_weight >= 0,
             "match_iou": 0.0 <= self.match_iou <= 1.0,
         }
         bad = [name for name, ok in checks.items() if not ok]

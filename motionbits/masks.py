@@ -2,8 +2,8 @@
 
 The paper prompts SAM2 with each cluster. The weight-free default here: every cluster gets
 one rigid motion fitted to its nodes; each pixel near a cluster takes the label whose
-motion best explains the pixel's own backward flow -- the static background and last
-frame's label compete too, the latter with a small credit so that a body that stops keeps
+motion best explains the pixel's own backward flow and its colour -- the static background
+and last frame's label compete too, the latter with a small credit so that a body that stops keeps
 its mask -- and specks are removed.
 """
 
@@ -57,11 +57,29 @@ def _dilated_support(grid: NodeGrid, node_labels: np.ndarray, label: int) -> np.
     return cv2.resize(m, (grid.width, grid.height), interpolation=cv2.INTER_NEAREST) > 0
 
 
+def _photometric_cost(cur: np.ndarray, prev: np.ndarray, theta: float, t: np.ndarray,
+                      window: int) -> np.ndarray:
+    """(H, W) mean absolute grey-level difference between the current frame and the
+    previous frame pulled back by the backward motion (R(theta), t), over a small window."""
+    c, s = np.cos(theta), np.sin(theta)
+    m = np.array([[c, -s, t[0]], [s, c, t[1]]], np.float32)
+    h, w = cur.shape
+    warped = cv2.warpAffine(prev, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                            borderMode=cv2.BORDER_REPLICATE)
+    return cv2.blur(np.abs(cur - warped), (window, window))
+
+
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
-                  trans: np.ndarray, flow_back: np.ndarray, prior: np.ndarray,
-                  prior_valid: np.ndarray, bonus: float, kept: np.ndarray,
-                  ambiguous: float) -> np.ndarray:
-    """Label every pixel by the motion that best explains its flow.
+                  trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
+                  prev_gray: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray, *,
+                  bonus: float, photo_weight: float, kept: np.ndarray, ambiguous: float
+                  ) -> np.ndarray:
+    """Label every pixel by the motion that best explains it.
+
+    The cost of a motion at a pixel is its flow residual (px) plus ``photo_weight`` times
+    its photometric residual (grey levels, 3x3 mean): flow is smooth across motion
+    boundaries, the images are not, so the photometric term puts the boundary where the
+    texture says it is.
 
     Args:
         grid: the node grid (its image size is the working resolution).
@@ -69,21 +87,25 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         labels: (K,) ids of the clusters, with backward motions ``thetas`` (K,), ``trans``
             (K, 2).
         flow_back: (H, W, 2) flow current -> previous.
+        cur_gray, prev_gray: (H, W) float32 grey frames.
         prior: (H, W) int32 last frame's label map carried to this frame.
         prior_valid: (H, W) bool, where ``prior`` is trustworthy (consistent flow).
-        bonus: px of residual credited to the prior's label.
+        bonus: cost credited to the prior's label.
+        photo_weight: px of cost per grey level of photometric residual.
         kept: ids of earlier MotionBits without a cluster now (e.g. bodies that stopped);
             they compete with the static motion on their prior pixels.
-        ambiguous: px; where a cluster's motion moves a pixel less than this, flow cannot
-            tell it from the background (e.g. near a centre of rotation) and the node-level
-            cluster label gets the same credit as the prior.
+        ambiguous: px; where a cluster's motion moves a pixel less than this, the motion
+            cannot be told from the background (e.g. near a centre of rotation) and the
+            node-level cluster label gets the same credit as the prior.
 
     Returns:
         (H, W) int32 label map.
     """
     h, w = flow_back.shape[:2]
+    window = 3
     credit = np.where(prior_valid, bonus, 0.0).astype(np.float32)
-    static_cost = np.linalg.norm(flow_back, axis=-1)
+    static_cost = np.linalg.norm(flow_back, axis=-1) + photo_weight * cv2.blur(
+        np.abs(cur_gray - prev_gray), (window, window))
     best = static_cost - credit * (prior == 0)
     out = np.zeros((h, w), np.int32)
     node_map = grid.to_image(node_labels.astype(np.int32))
@@ -95,14 +117,16 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         out[better] = lab
     for lab, th, t in zip(labels, thetas, trans):
         ys, xs = np.nonzero(_dilated_support(grid, node_labels, lab))
+        photo = _photometric_cost(cur_gray, prev_gray, th, t, window)[ys, xs]
         c, s = np.cos(th), np.sin(th)
         px = xs.astype(np.float32)
         py = ys.astype(np.float32)
-        rx = c * px - s * py + t[0] - (px + flow_back[ys, xs, 0])
-        ry = s * px + c * py + t[1] - (py + flow_back[ys, xs, 1])
-        still = np.hypot(c * px - s * py + t[0] - px, s * px + c * py + t[1] - py) < ambiguous
+        mx = c * px - s * py + t[0] - px  # the model's backward displacement
+        my = s * px + c * py + t[1] - py
+        resid = np.hypot(mx - flow_back[ys, xs, 0], my - flow_back[ys, xs, 1])
+        still = np.hypot(mx, my) < ambiguous
         own = ((prior[ys, xs] == lab) & prior_valid[ys, xs]) | (still & (node_map[ys, xs] == lab))
-        cost = np.sqrt(rx * rx + ry * ry) - bonus * own
+        cost = resid + photo_weight * photo - bonus * own
         better = cost < best[ys, xs]
         best[ys[better], xs[better]] = cost[better]
         out[ys[better], xs[better]] = lab

@@ -4,10 +4,12 @@ X = B^ B^T (rows of B l2-normalised), unit self-loops, column-normalised, then M
 Dongen): expansion (matrix power), inflation (element-wise power), column
 re-normalisation, pruning of tiny entries. Clusters are the attractor systems.
 
-Two exact devices keep it affordable on a CPU:
+Exact devices keep it affordable on a CPU:
 
+- MCL never joins what is disconnected: on a block-diagonal matrix (up to a permutation)
+  it runs on each connected block of the support independently, with the same result;
 - rows of the iterate that are entirely zero stay zero, so each expansion only multiplies
-  the live rows (after a few iterations most mass sits on few attractors);
+  the rows that still hold mass;
 - nodes with identical rows of B^ have identical rows and columns in every iterate, so
   they can be clustered once with their multiplicity (``multiplicity``): the result is
   the same as on the expanded matrix.
@@ -82,16 +84,36 @@ def markov_cluster(
         multiplicity: (m,) positive integers, how many identical nodes each row stands for.
 
     Returns:
-        (labels (m,) int64 in 0..K-1, iterations run).
+        (labels (m,) int64 in 0..K-1 numbered by first appearance, largest iteration count
+        of any block).
     """
-    m = np.array(x, dtype=np.float64, copy=True)
-    size = m.shape[0]
+    size = x.shape[0]
     if size == 0:
         return np.zeros(0, np.int64), 0
     mult = np.ones(size) if multiplicity is None else np.asarray(multiplicity, np.float64)
+    threshold = prune / mult.sum()
+    n_blocks, block = connected_components(coo_matrix(x != 0), directed=False)
+    labels = np.zeros(size, np.int64)
+    offset = 0
+    iters = 0
+    for b in range(n_blocks):
+        idx = np.flatnonzero(block == b)
+        lab, it = _mcl_block(x[np.ix_(idx, idx)], mult[idx], expansion, inflation, threshold,
+                             max_iters, stable_iters)
+        labels[idx] = lab + offset
+        offset += int(lab.max()) + 1
+        iters = max(iters, it)
+    _, first = np.unique(labels, return_index=True)
+    order = np.argsort(np.argsort(first))
+    return order[labels], iters
+
+
+def _mcl_block(x, mult, expansion, inflation, threshold, max_iters, stable_iters):
+    m = np.array(x, dtype=np.float64, copy=True)
+    if m.shape[0] == 1:
+        return np.zeros(1, np.int64), 0
     np.fill_diagonal(m, 1.0)
     m = _normalize_columns(m, mult)
-    threshold = prune / mult.sum()
     labels = attractor_labels(m)
     same = 0
     it = 0

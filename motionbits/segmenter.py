@@ -82,6 +82,10 @@ class MotionBitsResult:
         return [mb.id for mb in self.motionbits]
 
 
+def _gray(frame: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY).astype(np.float32)
+
+
 class MotionBitsSegmenter:
     """Online, learning-free segmentation of moving rigid bodies.
 
@@ -234,8 +238,10 @@ class MotionBitsSegmenter:
                 node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability)
             kept = np.setdiff1d(np.unique(prior_nodes[prior_nodes > 0]), ids)
             kept = np.union1d(kept, np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids))
-            labels = assign_pixels(grid, node_ids, ids, thetas, trans, flow_back, prior,
-                                   prior_valid, cfg.prior_bonus, kept, cfg.move_threshold)
+            labels = assign_pixels(
+                grid, node_ids, ids, thetas, trans, flow_back, _gray(cur), _gray(self._prev),
+                prior, prior_valid, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
+                kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(2 * cw * ch)))
 
