@@ -48,6 +48,8 @@ class TransformersVLM(BaseVLM):
             it for temporal position ids, VideoLLaMA3 for its per-frame timestamps).
             ``None`` leaves the processor's default.
         name: a short name for logs and benchmark tables.
+        processor_call_kwargs: extra keyword arguments for every ``processor(...)`` call
+            (e.g. ``{"crop_to_patches": True}`` for InternVL tiling).
 
     Use `from_pretrained` to load a checkpoint folder, as with transformers.
     """
@@ -67,6 +69,7 @@ class TransformersVLM(BaseVLM):
         frames_as: str | None = None,
         fps: float | None = None,
         name: str | None = None,
+        processor_call_kwargs: dict[str, Any] | None = None,
     ) -> None:
         frames_as = frames_as or self.default_frames_as
         if frames_as not in _FRAMES_AS:
@@ -81,6 +84,7 @@ class TransformersVLM(BaseVLM):
         self.frames_as = frames_as
         self.fps = fps
         self.name = name or self.default_name
+        self.processor_call_kwargs = dict(processor_call_kwargs or {})
 
     # ------------------------------------------------------------------ loading
     @classmethod
@@ -93,6 +97,7 @@ class TransformersVLM(BaseVLM):
         frames_as: str | None = None,
         fps: float | None = None,
         name: str | None = None,
+        processor_call_kwargs: dict[str, Any] | None = None,
         attn_implementation: str | None = None,
         trust_remote_code: bool = False,
         model_kwargs: dict[str, Any] | None = None,
@@ -105,7 +110,7 @@ class TransformersVLM(BaseVLM):
             device: ``"cpu"``, ``"cuda"``, ``"cuda:1"``, a ``torch.device``; default: CUDA
                 when available, else CPU.
             dtype: ``torch.dtype`` or its name; default: bfloat16 on CUDA, float32 on CPU.
-            frames_as, fps, name: see the class docstring.
+            frames_as, fps, name, processor_call_kwargs: see the class docstring.
             attn_implementation: e.g. ``"sdpa"``, ``"flash_attention_2"``, ``"eager"``.
             trust_remote_code: forwarded to transformers; the native classes do not need it.
             model_kwargs / processor_kwargs: extra arguments for the two ``from_pretrained`` calls
@@ -141,7 +146,9 @@ class TransformersVLM(BaseVLM):
             ) from exc
         model.to(device)
         model.eval()
-        return cls(model, processor, frames_as=frames_as, fps=fps, name=name)
+        return cls(
+            model, processor, frames_as=frames_as, fps=fps, name=name, processor_call_kwargs=processor_call_kwargs
+        )
 
     # ------------------------------------------------------------------ inputs
     @property
@@ -160,6 +167,10 @@ class TransformersVLM(BaseVLM):
             messages.append({"role": "system", "content": [{"type": "text", "text": system}]})
         messages.append({"role": "user", "content": [*visual, {"type": "text", "text": prompt}]})
         return messages
+
+    def default_call_kwargs(self) -> dict[str, Any]:
+        """Processor-call defaults of this model family (overridden by `processor_call_kwargs`)."""
+        return {}
 
     def _video_metadata(self, num_frames: int) -> dict[str, Any]:
         return {"total_num_frames": num_frames, "fps": float(self.fps), "frames_indices": list(range(num_frames))}
@@ -201,6 +212,8 @@ class TransformersVLM(BaseVLM):
                 kwargs["video_metadata"] = [self._video_metadata(len(c)) for c in clips]
         else:
             kwargs["images"] = [img for c in clips for img in c]
+        kwargs.update(self.default_call_kwargs())
+        kwargs.update(self.processor_call_kwargs)
         inputs = self.processor(**kwargs)
         return inputs.to(self.device)
 

@@ -40,7 +40,10 @@ class InternVLAdapter(TransformersVLM):
     """InternVL (2.5 / 3 / 3.5, transformers format) adapter.
 
     Video frames become one ``<video>`` input that the processor expands to
-    "Frame1: <img>...</img>" blocks, one tile per frame.
+    "Frame1: <img>...</img>" blocks, one tile per frame. With ``frames_as="images"`` each
+    frame is also one tile (``crop_to_patches=False``, as InternVL's video recipe does);
+    pass ``processor_call_kwargs={"crop_to_patches": True}`` for InternVL's dynamic tiling
+    of each image (up to 12 tiles + a thumbnail per frame).
 
     Example:
         >>> vlm = InternVLAdapter.from_pretrained("/models/InternVL3-8B-hf")
@@ -50,6 +53,9 @@ class InternVLAdapter(TransformersVLM):
     model_class_name = "InternVLForConditionalGeneration"
     default_frames_as = "video"
     default_name = "internvl"
+
+    def default_call_kwargs(self) -> dict[str, Any]:
+        return {"crop_to_patches": False} if self.frames_as == "images" else {}
 
 
 class InternVideo25Adapter(BaseVLM):
