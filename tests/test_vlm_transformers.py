@@ -293,3 +293,38 @@ def test_processor_without_chat_template_is_rejected(qwen):
 
     with pytest.raises(ValueError, match="chat template"):
         Qwen2_5_VLAdapter(qwen.model, NoTemplate())
+
+
+# ----------------------------------------------------------------------------- InternVideo2.5 (remote code)
+
+
+def test_internvideo25_calls_the_checkpoint_chat_contract():
+    """The remote-code model is not available offline; check what the adapter hands to its
+    ``chat`` method (InternVL's signature, as in the InternVideo2.5 model card)."""
+    from vlm_adapters import InternVideo25Adapter
+
+    class FakeRemoteModel(torch.nn.Module):
+        system_message = "default system"
+
+        def __init__(self):
+            super().__init__()
+            self.w = torch.nn.Parameter(torch.zeros(1, dtype=torch.float32))
+            self.calls = []
+
+        def chat(self, tokenizer, pixel_values, question, generation_config, num_patches_list=None,
+                 history=None, return_history=False):
+            self.calls.append((tokenizer, pixel_values, question, dict(generation_config), num_patches_list,
+                               self.system_message))
+            return f"  {question.count('<image>')} frames  "
+
+    model = FakeRemoteModel()
+    vlm = InternVideo25Adapter(model, tokenizer="tok", image_size=56)
+    frames = _marked_frames(3)
+    assert vlm.generate(frames, "What moved?", system="sys", max_new_tokens=9) == "3 frames"
+    tok, pv, question, gen, patches, system = model.calls[0]
+    assert tok == "tok" and pv.shape == (3, 3, 56, 56) and pv.dtype == torch.float32
+    assert question == "Frame1: <image>\nFrame2: <image>\nFrame3: <image>\nWhat moved?"
+    assert gen["max_new_tokens"] == 9 and gen["do_sample"] is False and patches == [1, 1, 1]
+    assert system == "sys" and model.system_message == "default system"  # restored after the call
+    # ImageNet normalisation of the background value 40/255 in the red channel
+    assert float(pv[0, 0, 0, 0]) == pytest.approx((40 / 255 - 0.485) / 0.229, abs=1e-3)
