@@ -328,3 +328,13 @@ def test_internvideo25_calls_the_checkpoint_chat_contract():
     assert system == "sys" and model.system_message == "default system"  # restored after the call
     # ImageNet normalisation of the background value 40/255 in the red channel
     assert float(pv[0, 0, 0, 0]) == pytest.approx((40 / 255 - 0.485) / 0.229, abs=1e-3)
+
+
+def test_dtype_reaches_model_and_pixels(qwen_dir):
+    """bfloat16 (the CUDA default) end to end, here on CPU: pixels follow the model dtype."""
+    vlm = Qwen2_5_VLAdapter.from_pretrained(str(qwen_dir), device="cpu", dtype="bfloat16")
+    assert vlm.model.dtype == torch.bfloat16
+    inputs = vlm.prepare_inputs(_marked_frames(2), "What moved?")
+    assert inputs["pixel_values_videos"].dtype == torch.bfloat16
+    assert inputs["input_ids"].dtype == torch.long
+    assert isinstance(vlm.generate(_marked_frames(2), "What moved?", max_new_tokens=3), str)

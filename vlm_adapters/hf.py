@@ -215,7 +215,8 @@ class TransformersVLM(BaseVLM):
         kwargs.update(self.default_call_kwargs())
         kwargs.update(self.processor_call_kwargs)
         inputs = self.processor(**kwargs)
-        return inputs.to(self.device)
+        # pixel values to the model's device and dtype (e.g. bfloat16 on CUDA); ids stay integer
+        return inputs.to(device=self.device, dtype=getattr(self.model, "dtype", None))
 
     # ------------------------------------------------------------------ generation
     def _generate(
