@@ -21,7 +21,9 @@ PIP="python -m pip"
 $PIP install -c "$here/constraints.txt" -r "$here/requirements-vlm.txt"
 $PIP install -c "$here/constraints.txt" --no-deps "torchvision==0.28.0" "ultralytics>=8.3.160,<8.5"
 python - <<'PY'
+import importlib.metadata as md
 import torch, transformers
-print("torch", torch.__version__, "| transformers", transformers.__version__)
-assert "+cpu" in torch.__version__ or not torch.cuda.is_available() or True
+print("torch", torch.__version__, "| transformers", transformers.__version__,
+      "| ultralytics", md.version("ultralytics"), "| torchvision", md.version("torchvision"))
+assert torch.__version__.startswith("2.13.0"), f"torch pin lost: {torch.__version__}"
 PY
