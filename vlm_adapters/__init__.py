@@ -75,7 +75,8 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
 
 
-if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only (names are in __all__ via _EXPORTS)
+    # ruff: noqa: F401
     from .base import BaseVLM, Frame, MissingDependencyError, VLMAdapter, sample_frames, to_rgb_frames
     from .grounding import (
         Detections,
