@@ -1,0 +1,127 @@
+"""OpenAICompatibleVLM against a local chat-completions server started by the test."""
+from __future__ import annotations
+
+import base64
+import io
+import json
+import threading
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from vlm_adapters import OpenAICompatibleVLM
+
+
+class _Server:
+    """A minimal /v1/chat/completions endpoint that validates requests and records them."""
+
+    def __init__(self):
+        self.requests: list[dict] = []
+        self.headers: list[dict] = []
+        server = self
+
+        class Handler(BaseHTTPRequestHandler):
+            def log_message(self, *args):  # keep test output quiet
+                pass
+
+            def do_POST(self):
+                body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
+                server.requests.append(body)
+                server.headers.append(dict(self.headers))
+                if self.path != "/v1/chat/completions":
+                    return self._send(404, {"error": {"message": f"no route {self.path}"}})
+                user = body["messages"][-1]
+                images = [p for p in user["content"] if p["type"] == "image_url"]
+                texts = [p["text"] for p in user["content"] if p["type"] == "text"]
+                if not images or not texts:
+                    return self._send(400, {"error": {"message": "need images and a prompt"}})
+                sizes = []
+                for p in images:
+                    header, data = p["image_url"]["url"].split(",", 1)
+                    assert header.startswith("data:image/") and header.endswith(";base64")
+                    sizes.append(Image.open(io.BytesIO(base64.b64decode(data))).size)
+                answer = f"saw {len(images)} images of {sizes[0][0]}x{sizes[0][1]}; asked: {texts[-1]}"
+                self._send(200, {
+                    "id": "x", "object": "chat.completion", "model": body["model"],
+                    "choices": [{"index": 0, "message": {"role": "assistant", "content": answer},
+                                 "finish_reason": "stop"}],
+                })
+
+            def _send(self, code, payload):
+                data = json.dumps(payload).encode()
+                self.send_response(code)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(data)))
+                self.end_headers()
+                self.wfile.write(data)
+
+        self.httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        self.url = f"http://127.0.0.1:{self.httpd.server_address[1]}/v1"
+        self.thread = threading.Thread(target=self.httpd.serve_forever, daemon=True)
+        self.thread.start()
+
+    def close(self):
+        self.httpd.shutdown()
+        self.httpd.server_close()
+
+
+@pytest.fixture()
+def server():
+    s = _Server()
+    yield s
+    s.close()
+
+
+def _frames(n=3, h=48, w=64):
+    rng = np.random.default_rng(0)
+    return [rng.integers(0, 256, (h, w, 3), dtype=np.uint8) for _ in range(n)]
+
+
+def test_request_carries_images_prompt_and_settings(server):
+    vlm = OpenAICompatibleVLM(server.url, model="Qwen/Qwen2.5-VL-7B-Instruct", api_key="secret")
+    frames = _frames()
+    answer = vlm.generate(frames, "What moved?", system="Be brief.", max_new_tokens=32, seed=7)
+    assert answer == "saw 3 images of 64x48; asked: What moved?"
+    req = server.requests[-1]
+    assert req["model"] == "Qwen/Qwen2.5-VL-7B-Instruct"
+    assert req["messages"][0] == {"role": "system", "content": "Be brief."}
+    assert req["max_tokens"] == 32 and req["temperature"] == 0.0 and req["seed"] == 7
+    assert server.headers[-1]["Authorization"] == "Bearer secret"
+    # the PNG data URLs decode to the very pixels that were sent
+    url = req["messages"][1]["content"][0]["image_url"]["url"]
+    decoded = np.asarray(Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))))
+    np.testing.assert_array_equal(decoded, frames[0])
+
+
+def test_pil_frames_jpeg_and_downscale(server):
+    vlm = OpenAICompatibleVLM(server.url, model="m", image_format="jpeg", max_image_side=32)
+    frames = [Image.fromarray(f) for f in _frames(2)]
+    assert vlm.generate(frames, "Q", do_sample=True, temperature=0.5) == "saw 2 images of 32x24; asked: Q"
+    assert server.requests[-1]["temperature"] == 0.5
+    assert server.requests[-1]["messages"][0]["content"][0]["image_url"]["url"].startswith("data:image/jpeg;base64,")
+
+
+def test_generate_batch_keeps_order(server):
+    vlm = OpenAICompatibleVLM(server.url, model="m", max_workers=3)
+    videos = [_frames(n) for n in (1, 2, 3, 4)]
+    answers = vlm.generate_batch(videos, [f"q{i}" for i in range(4)])
+    assert answers == [f"saw {n} images of 64x48; asked: q{i}" for i, n in enumerate((1, 2, 3, 4))]
+
+
+def test_http_error_is_reported_with_body(server):
+    vlm = OpenAICompatibleVLM(server.url + "/wrong", model="m")
+    with pytest.raises(RuntimeError, match="HTTP 404.*no route"):
+        vlm.generate(_frames(1), "Q")
+
+
+def test_unreachable_server_is_a_connection_error():
+    import socket
+
+    with socket.socket() as s:  # a port with nothing listening
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    vlm = OpenAICompatibleVLM(f"http://127.0.0.1:{port}/v1", model="m", timeout=5)
+    with pytest.raises(ConnectionError, match="is the server running"):
+        vlm.generate(_frames(1), "Q")

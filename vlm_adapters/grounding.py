@@ -1,0 +1,394 @@
+"""The reverse path: VLM text -> noun phrases -> open-vocabulary detector -> label map.
+
+The paper (section 6.1) turns the VLM baselines' answers into masks with YOLOE-L, a
+promptable open-vocabulary segmenter: the object names become YOLOE's text classes and
+its instance masks on the final frame become the prediction. Pieces:
+
+* `Detections`: (K, H, W) masks, scores and the phrase of each instance.
+* `PhraseDetector`: the protocol a detector follows, ``detect(image, phrases) -> Detections``.
+* `YOLOEDetector`: ultralytics YOLOE behind that protocol. Weights come from a local file;
+  text embeddings come from a local MobileCLIP text encoder file, or are given up front
+  with `set_classes(names, embeddings)`.
+* `masks_to_label_map`: instance masks -> (H, W) int32 labels (0 = background, 1..K).
+* `TextGrounder`: answer text + image -> label map, with any `PhraseDetector`;
+  `YOLOEGrounder` is a `TextGrounder` over a `YOLOEDetector`.
+
+torch and ultralytics are imported only when a YOLOE model is built.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from .base import Frame, MissingDependencyError, require, to_rgb_array
+from .phrases import phrases_from_answer
+
+__all__ = [
+    "Detections",
+    "PhraseDetector",
+    "YOLOEDetector",
+    "TextGrounder",
+    "YOLOEGrounder",
+    "masks_to_label_map",
+]
+
+
+@dataclass
+class Detections:
+    """Instances found in one image.
+
+    Attributes:
+        masks: (K, H, W) bool, one mask per instance, at the image's size.
+        scores: (K,) float32 confidences.
+        phrases: K strings, the text prompt each instance was found for.
+    """
+
+    masks: np.ndarray
+    scores: np.ndarray
+    phrases: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.masks = np.asarray(self.masks, dtype=bool)
+        self.scores = np.asarray(self.scores, dtype=np.float32).reshape(-1)
+        if self.masks.ndim != 3:
+            raise ValueError(f"masks must be (K, H, W), got shape {self.masks.shape}")
+        if len(self.scores) != len(self.masks):
+            raise ValueError(f"{len(self.masks)} masks but {len(self.scores)} scores")
+        if self.phrases and len(self.phrases) != len(self.masks):
+            raise ValueError(f"{len(self.masks)} masks but {len(self.phrases)} phrases")
+
+    def __len__(self) -> int:
+        return len(self.masks)
+
+    @classmethod
+    def empty(cls, height: int, width: int) -> Detections:
+        return cls(np.zeros((0, height, width), bool), np.zeros((0,), np.float32), [])
+
+
+@runtime_checkable
+class PhraseDetector(Protocol):
+    """Anything that finds instances of text phrases in an image."""
+
+    def detect(self, image: np.ndarray, phrases: Sequence[str]) -> Detections:
+        """Instances of `phrases` in `image` ((H, W, 3) uint8 RGB); masks at (H, W)."""
+        ...
+
+
+def masks_to_label_map(
+    masks: np.ndarray,
+    scores: np.ndarray | None = None,
+    *,
+    min_area: int = 1,
+    max_instances: int | None = None,
+) -> np.ndarray:
+    """Instance masks -> one label map.
+
+    Masks are painted from the highest score down; a pixel keeps the first (highest-scoring)
+    instance that claims it. An instance left with fewer than `min_area` pixels of its own is
+    dropped. Labels are 1..K in descending-score order, with no gaps.
+
+    Args:
+        masks: (K, H, W) bool.
+        scores: (K,) confidences; None paints in the given order.
+        min_area: minimum visible pixels for an instance to keep a label.
+        max_instances: keep at most this many labels (the highest-scoring ones).
+
+    Returns:
+        (H, W) int32 label map, 0 = background.
+    """
+    masks = np.asarray(masks, dtype=bool)
+    if masks.ndim != 3:
+        raise ValueError(f"masks must be (K, H, W), got shape {masks.shape}")
+    k, h, w = masks.shape
+    labels = np.zeros((h, w), np.int32)
+    order = np.arange(k) if scores is None else np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
+    next_label = 1
+    for i in order:
+        if max_instances is not None and next_label > max_instances:
+            break
+        own = masks[i] & (labels == 0)
+        if int(own.sum()) < max(min_area, 1):
+            continue
+        labels[own] = next_label
+        next_label += 1
+    return labels
+
+
+# --------------------------------------------------------------------------- YOLOE
+
+
+def _default_device() -> str:
+    torch = require("torch", "yoloe", "YOLOEDetector")
+    return "cuda:0" if torch.cuda.is_available() else "cpu"
+
+
+class YOLOEDetector:
+    """ultralytics YOLOE (segmentation) prompted with text classes.
+
+    Args:
+        model: an ``ultralytics.YOLOE`` segmentation model (``YOLOE("yoloe-11l-seg.pt")``).
+        text_encoder: how to embed phrases not given with `set_classes`: a path to the
+            TorchScript MobileCLIP text encoder YOLOE was trained with (``mobileclip_blt.ts``
+            for YOLOE-11/v8), or a callable ``list[str] -> (N, D)`` raw text features.
+            None: only phrases registered with `set_classes` can be detected.
+        conf: minimum confidence of a detection.
+        iou: NMS IoU threshold.
+        imgsz: inference size (longer side), as in ultralytics.
+        max_det: at most this many detections per image.
+        device: ``"cpu"``, ``"cuda:0"``, ...; default CUDA when available.
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        *,
+        text_encoder: str | os.PathLike | Callable[[list[str]], Any] | None = None,
+        conf: float = 0.25,
+        iou: float = 0.7,
+        imgsz: int = 640,
+        max_det: int = 100,
+        device: str | None = None,
+    ) -> None:
+        self.model = model
+        self.conf = conf
+        self.iou = iou
+        self.imgsz = imgsz
+        self.max_det = max_det
+        self.device = device or _default_device()
+        self._text_encoder_spec = text_encoder
+        self._encode: Callable[[list[str]], Any] | None = None
+        self._embeddings: dict[str, Any] = {}  # phrase -> (D,) prompt embedding (after YOLOE's text head)
+        self._active: list[str] | None = None  # classes currently set on the model
+        if text_encoder is not None and not callable(text_encoder) and not os.path.isfile(text_encoder):
+            raise FileNotFoundError(
+                f"text encoder file '{text_encoder}' does not exist. YOLOE's text prompts need the "
+                f"MobileCLIP TorchScript text encoder (mobileclip_blt.ts for YOLOE-11/v8) as a local file; "
+                f"or precompute embeddings and pass them to set_classes(names, embeddings)."
+            )
+
+    @classmethod
+    def from_pretrained(
+        cls,
+        weights: str | os.PathLike,
+        *,
+        text_encoder: str | os.PathLike | Callable[[list[str]], Any] | None = None,
+        **kwargs: Any,
+    ) -> YOLOEDetector:
+        """Build from a local YOLOE checkpoint (``yoloe-11l-seg.pt``) or model YAML (random weights).
+
+        A ``.yaml`` name may be one of ultralytics' packaged model configs
+        (``"yoloe-11s-seg.yaml"``): that builds an untrained model, useful for tests only.
+        """
+        ultralytics = require("ultralytics", "yoloe", "YOLOEDetector")
+        require("torch", "yoloe", "YOLOEDetector")
+        w = os.fspath(weights)
+        if not w.endswith((".yaml", ".yml")) and not os.path.isfile(w):
+            raise FileNotFoundError(
+                f"YOLOE weights '{w}' not found. Pass a local checkpoint file such as yoloe-11l-seg.pt "
+                f"(the paper used YOLOE-L); nothing is downloaded."
+            )
+        model = ultralytics.YOLOE(w)
+        if getattr(model, "task", "segment") != "segment":
+            raise ValueError(f"'{w}' is a {model.task} model; the grounder needs a YOLOE *-seg* model for masks")
+        return cls(model, text_encoder=text_encoder, **kwargs)
+
+    # ----------------------------------------------------------------- embeddings
+    @property
+    def known_phrases(self) -> list[str]:
+        """Phrases with an embedding ready (from `set_classes` or computed earlier)."""
+        return list(self._embeddings)
+
+    def set_classes(self, names: Sequence[str], embeddings: Any = None) -> None:
+        """Register phrases with their YOLOE prompt embeddings (no text encoder needed).
+
+        Args:
+            names: N phrases.
+            embeddings: (N, D) or (1, N, D) tensor / array of *prompt embeddings* as
+                ``YOLOE.get_text_pe(names)`` returns them (text features already passed through
+                YOLOE's text head); None computes them with the text encoder.
+        """
+        import torch
+
+        names = [str(n) for n in names]
+        if embeddings is None:
+            emb = self._embed(names)
+        else:
+            emb = torch.as_tensor(np.asarray(embeddings) if not torch.is_tensor(embeddings) else embeddings)
+            emb = emb.detach().float().reshape(-1, emb.shape[-1])
+            if emb.shape[0] != len(names):
+                raise ValueError(f"{len(names)} names but {emb.shape[0]} embeddings")
+        for n, e in zip(names, emb):
+            self._embeddings[n] = e.detach().cpu()
+        self._active = None
+
+    def _text_features(self, names: list[str]) -> Any:
+        if self._encode is None:
+            spec = self._text_encoder_spec
+            if spec is None:
+                raise ValueError(
+                    f"no embeddings for {names} and no text encoder: pass text_encoder='mobileclip_blt.ts' "
+                    f"(a local file) to YOLOEDetector, or call set_classes(names, embeddings) first"
+                )
+            if callable(spec):
+                self._encode = spec
+            else:
+                import torch
+
+                try:
+                    from ultralytics.nn.text_model import MobileCLIPTS
+                except ImportError as exc:  # the `clip` tokenizer package is missing
+                    raise MissingDependencyError(
+                        "YOLOE text prompts need ultralytics' CLIP tokenizer: "
+                        "pip install git+https://github.com/ultralytics/CLIP.git"
+                    ) from exc
+                enc = MobileCLIPTS(torch.device(self.device), weight=os.fspath(spec))
+                self._encode = lambda texts: enc.encode_text(enc.tokenize(texts))
+        return self._encode(names)
+
+    def _embed(self, names: list[str]) -> Any:
+        """Raw text features -> YOLOE prompt embeddings, through the model's own text head."""
+        import torch
+
+        feats = torch.as_tensor(self._text_features(names)).float()
+        feats = feats.reshape(1, len(names), feats.shape[-1])
+        head = self.model.model.model[-1]
+        param = next(self.model.model.parameters())
+        with torch.inference_mode():
+            pe = head.get_tpe(feats.to(param.device, param.dtype)) if hasattr(head, "get_tpe") else feats
+        return pe.detach().float().reshape(len(names), -1)
+
+    # ----------------------------------------------------------------- detection
+    def _activate(self, phrases: list[str]) -> None:
+        import torch
+
+        if phrases == self._active:
+            return
+        missing = [p for p in phrases if p not in self._embeddings]
+        if missing:
+            self.set_classes(missing)
+        param = next(self.model.model.parameters())
+        emb = torch.stack([self._embeddings[p] for p in phrases])[None].to(param.device, param.dtype)
+        self.model.set_classes(list(phrases), emb)
+        self._active = list(phrases)
+
+    def detect(self, image: Frame, phrases: Sequence[str]) -> Detections:
+        """Instances of `phrases` in `image` ((H, W, 3) uint8 RGB or PIL); masks at (H, W)."""
+        rgb = to_rgb_array(image)
+        h, w = rgb.shape[:2]
+        phrases = list(dict.fromkeys(str(p) for p in phrases))
+        if not phrases:
+            return Detections.empty(h, w)
+        self._activate(phrases)
+        result = self.model.predict(
+            np.ascontiguousarray(rgb[:, :, ::-1]),  # ultralytics takes numpy images as BGR
+            conf=self.conf,
+            iou=self.iou,
+            imgsz=self.imgsz,
+            max_det=self.max_det,
+            retina_masks=True,  # masks at the original image size
+            device=self.device,
+            verbose=False,
+        )[0]
+        if result.masks is None or result.boxes is None or len(result.boxes) == 0:
+            return Detections.empty(h, w)
+        masks = result.masks.data.detach().cpu().numpy() > 0.5
+        if masks.shape[1:] != (h, w):  # defensive: resize to the image if the backend did not
+            import cv2
+
+            masks = np.stack([cv2.resize(m.astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST) for m in masks]) > 0
+        scores = result.boxes.conf.detach().cpu().numpy().astype(np.float32)
+        cls = result.boxes.cls.detach().cpu().numpy().astype(int)
+        return Detections(masks, scores, [phrases[c] for c in cls])
+
+
+# --------------------------------------------------------------------------- grounders
+
+
+class TextGrounder:
+    """VLM answer + image -> (H, W) int32 label map, with any `PhraseDetector`.
+
+    Args:
+        detector: finds instances of phrases in an image (`YOLOEDetector`, or a stub).
+        parse: answer text -> phrases; default `phrases_from_answer` (the
+            ``- <noun phrase>: <description>`` format, else free-text noun phrases).
+        min_area: instances with fewer visible pixels are dropped.
+        max_instances: at most this many labels per image.
+    """
+
+    def __init__(
+        self,
+        detector: PhraseDetector,
+        *,
+        parse: Callable[[str], list[str]] = phrases_from_answer,
+        min_area: int = 1,
+        max_instances: int | None = None,
+    ) -> None:
+        self.detector = detector
+        self.parse = parse
+        self.min_area = min_area
+        self.max_instances = max_instances
+
+    def phrases(self, text: str) -> list[str]:
+        """The detector prompts found in `text`."""
+        return list(self.parse(text))
+
+    def detect(self, text: str, image: Frame) -> Detections:
+        """Instances of the objects named in `text`, found in `image`."""
+        rgb = to_rgb_array(image)
+        phrases = self.phrases(text)
+        if not phrases:
+            return Detections.empty(*rgb.shape[:2])
+        return self.detector.detect(rgb, phrases)
+
+    def ground(self, text: str, image: Frame) -> np.ndarray:
+        """(H, W) int32 label map of the objects named in `text` (0 = background, 1..K)."""
+        det = self.detect(text, image)
+        return masks_to_label_map(det.masks, det.scores, min_area=self.min_area, max_instances=self.max_instances)
+
+    __call__ = ground
+
+
+class YOLOEGrounder(TextGrounder):
+    """`TextGrounder` over YOLOE: the paper's VLM-text -> masks translation.
+
+    Example:
+        >>> grounder = YOLOEGrounder.from_pretrained("weights/yoloe-11l-seg.pt",
+        ...                                          text_encoder="weights/mobileclip_blt.ts")
+        >>> labels = grounder.ground("- red block: the cube that slid", final_frame)  # doctest: +SKIP
+        >>> labels.shape, labels.dtype  # doctest: +SKIP
+        ((480, 640), dtype('int32'))
+    """
+
+    detector: YOLOEDetector
+
+    def __init__(self, detector: YOLOEDetector | Any, **kwargs: Any) -> None:
+        if not isinstance(detector, YOLOEDetector):  # a bare ultralytics YOLOE model
+            detector = YOLOEDetector(detector)
+        super().__init__(detector, **kwargs)
+
+    @classmethod
+    def from_pretrained(
+        cls,
+        weights: str | os.PathLike,
+        *,
+        text_encoder: str | os.PathLike | Callable[[list[str]], Any] | None = None,
+        conf: float = 0.25,
+        iou: float = 0.7,
+        imgsz: int = 640,
+        max_det: int = 100,
+        device: str | None = None,
+        **grounder_kwargs: Any,
+    ) -> YOLOEGrounder:
+        """Load YOLOE weights (a local ``*-seg.pt``) and optionally its text encoder file."""
+        det = YOLOEDetector.from_pretrained(
+            weights, text_encoder=text_encoder, conf=conf, iou=iou, imgsz=imgsz, max_det=max_det, device=device
+        )
+        return cls(det, **grounder_kwargs)
+
+    def set_classes(self, names: Sequence[str], embeddings: Any = None) -> None:
+        """Register phrases with precomputed prompt embeddings; see `YOLOEDetector.set_classes`."""
+        self.detector.set_classes(names, embeddings)

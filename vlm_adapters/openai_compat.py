@@ -1,0 +1,193 @@
+"""A client for OpenAI-compatible chat-completions servers (vLLM, SGLang, LMDeploy, Ollama, ...).
+
+This is how most people serve Qwen2.5-VL and InternVL, e.g.::
+
+    vllm serve Qwen/Qwen2.5-VL-32B-Instruct --limit-mm-per-prompt '{"image": 16}'
+
+Frames are sent as base64 data-URL images (``image_url`` content parts) in one user message,
+followed by the prompt text. Standard library only (urllib): no extra to install.
+"""
+from __future__ import annotations
+
+import base64
+import io
+import json
+import os
+import urllib.error
+import urllib.request
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+from .base import DEFAULT_MAX_NEW_TOKENS, BaseVLM, Frame, _broadcast_prompts, to_pil_frames
+
+__all__ = ["OpenAICompatibleVLM", "encode_image_data_url"]
+
+
+def encode_image_data_url(image: Any, image_format: str = "png", max_side: int | None = None) -> str:
+    """One PIL image as a ``data:image/...;base64,...`` URL.
+
+    Args:
+        image: an RGB PIL image.
+        image_format: ``"png"`` (lossless: set-of-mark numbers stay crisp) or ``"jpeg"`` (smaller).
+        max_side: downscale so the longer side is at most this many pixels (None: keep size).
+    """
+    if max_side is not None and max(image.size) > max_side:
+        scale = max_side / max(image.size)
+        image = image.resize((max(1, round(image.size[0] * scale)), max(1, round(image.size[1] * scale))))
+    fmt = image_format.lower()
+    fmt = "jpeg" if fmt == "jpg" else fmt
+    buf = io.BytesIO()
+    image.save(buf, format=fmt.upper(), **({"quality": 90} if fmt == "jpeg" else {}))
+    return f"data:image/{fmt};base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+class OpenAICompatibleVLM(BaseVLM):
+    """Chat-completions client: frames as images, prompt as text, answer as a string.
+
+    Args:
+        base_url: the server's API root, e.g. ``"http://localhost:8000/v1"`` (``/chat/completions``
+            is appended).
+        model: the served model name (vLLM: the name given to ``vllm serve``).
+        api_key: sent as ``Authorization: Bearer ...``; default ``$OPENAI_API_KEY`` if set.
+        image_format: ``"png"`` or ``"jpeg"`` for the data URLs.
+        max_image_side: downscale frames so their longer side is at most this (None: as given).
+        timeout: seconds per request.
+        max_workers: parallel requests in `generate_batch`.
+        extra_body: extra JSON fields for every request (e.g. ``{"top_k": 1}`` for vLLM).
+        name: short name for tables (default: `model`).
+
+    Example:
+        >>> vlm = OpenAICompatibleVLM("http://localhost:8000/v1", model="Qwen/Qwen2.5-VL-32B-Instruct")
+        >>> vlm.generate(frames, "What rigid bodies have moved?", seed=0)  # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        base_url: str,
+        model: str,
+        *,
+        api_key: str | None = None,
+        image_format: str = "png",
+        max_image_side: int | None = None,
+        timeout: float = 300.0,
+        max_workers: int = 4,
+        extra_body: dict[str, Any] | None = None,
+        name: str | None = None,
+    ) -> None:
+        if not base_url.startswith(("http://", "https://")):
+            raise ValueError(f"base_url must start with http:// or https://, got {base_url!r}")
+        self.base_url = base_url.rstrip("/")
+        self.model = model
+        self.api_key = api_key if api_key is not None else os.environ.get("OPENAI_API_KEY")
+        self.image_format = image_format
+        self.max_image_side = max_image_side
+        self.timeout = timeout
+        self.max_workers = max(1, int(max_workers))
+        self.extra_body = dict(extra_body or {})
+        self.name = name or model
+
+    @classmethod
+    def from_pretrained(cls, model: str, *, base_url: str = "http://localhost:8000/v1", **kwargs: Any):
+        """transformers-style spelling: the served model name first, the server second."""
+        return cls(base_url, model, **kwargs)
+
+    @property
+    def endpoint(self) -> str:
+        return self.base_url + "/chat/completions"
+
+    def build_request(
+        self,
+        frames: Sequence[Frame],
+        prompt: str,
+        system: str | None = None,
+        *,
+        max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
+        do_sample: bool = False,
+        temperature: float = 1.0,
+        seed: int | None = None,
+    ) -> dict[str, Any]:
+        """The JSON body of one chat-completions request."""
+        content: list[dict[str, Any]] = [
+            {"type": "image_url", "image_url": {"url": encode_image_data_url(im, self.image_format, self.max_image_side)}}
+            for im in to_pil_frames(frames)
+        ]
+        content.append({"type": "text", "text": prompt})
+        messages: list[dict[str, Any]] = []
+        if system:
+            messages.append({"role": "system", "content": system})
+        messages.append({"role": "user", "content": content})
+        body: dict[str, Any] = {
+            "model": self.model,
+            "messages": messages,
+            "max_tokens": int(max_new_tokens),
+            # greedy decoding is temperature 0 in this API
+            "temperature": float(temperature) if do_sample else 0.0,
+        }
+        if seed is not None:
+            body["seed"] = int(seed)
+        body.update(self.extra_body)
+        return body
+
+    def _post(self, body: dict[str, Any]) -> dict[str, Any]:
+        data = json.dumps(body).encode("utf-8")
+        headers = {"Content-Type": "application/json"}
+        if self.api_key:
+            headers["Authorization"] = f"Bearer {self.api_key}"
+        req = urllib.request.Request(self.endpoint, data=data, headers=headers, method="POST")
+        try:
+            with urllib.request.urlopen(req, timeout=self.timeout) as resp:
+                return json.loads(resp.read().decode("utf-8"))
+        except urllib.error.HTTPError as exc:
+            detail = exc.read().decode("utf-8", "replace")[:2000]
+            raise RuntimeError(f"{self.endpoint} answered HTTP {exc.code}: {detail}") from exc
+        except urllib.error.URLError as exc:
+            raise ConnectionError(
+                f"could not reach {self.endpoint} ({exc.reason}); is the server running "
+                f"(e.g. `vllm serve {self.model}`)?"
+            ) from exc
+
+    def generate(
+        self,
+        frames: Sequence[Frame],
+        prompt: str,
+        system: str | None = None,
+        *,
+        max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
+        do_sample: bool = False,
+        temperature: float = 1.0,
+        seed: int | None = None,
+    ) -> str:
+        """Send frames + prompt, return the first choice's message content."""
+        body = self.build_request(
+            frames, prompt, system, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature, seed=seed
+        )
+        reply = self._post(body)
+        try:
+            content = reply["choices"][0]["message"]["content"]
+        except (KeyError, IndexError, TypeError) as exc:
+            raise RuntimeError(f"unexpected reply from {self.endpoint}: {str(reply)[:500]}") from exc
+        if isinstance(content, list):  # some servers return content parts
+            content = "".join(p.get("text", "") for p in content if isinstance(p, dict))
+        return (content or "").strip()
+
+    def generate_batch(
+        self,
+        videos: Sequence[Sequence[Frame]],
+        prompts: Sequence[str] | str,
+        system: str | None = None,
+        *,
+        max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
+        do_sample: bool = False,
+        temperature: float = 1.0,
+        seed: int | None = None,
+    ) -> list[str]:
+        """One request per video, `max_workers` in flight; answers in input order."""
+        prompts = _broadcast_prompts(prompts, len(videos))
+        kw = dict(max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature, seed=seed)
+        with ThreadPoolExecutor(self.max_workers) as pool:
+            futures = [pool.submit(self.generate, v, p, system, **kw) for v, p in zip(videos, prompts)]
+            return [f.result() for f in futures]
+
+    def __repr__(self) -> str:
+        return f"OpenAICompatibleVLM(base_url={self.base_url!r}, model={self.model!r})"
