@@ -111,8 +111,13 @@ def test_benchmark_runner_and_command(tmp_path, capsys):
     def oracle(frames):  # knows the answer (frames are lossless PNGs)
         return answers[frames[-1].tobytes()]
 
-    res, spf = run_benchmark(tmp_path / "data", {"oracle": oracle, "flow-cc": make_method("flow-cc")},
+    def not_installed(frames):
+        raise ImportError("needs a package that is not installed")
+
+    res, spf = run_benchmark(tmp_path / "data", {"oracle": oracle, "flow-cc": make_method("flow-cc"),
+                                                 "absent": not_installed},
                              save_pred=tmp_path / "pred", progress=False)
+    assert set(res) == {"oracle", "flow-cc"}  # the method that cannot run is skipped
     assert res["oracle"]["macro"]["F1"] == 1.0 and res["oracle"]["macro"]["BF1"] == 1.0
     assert 0.0 < res["flow-cc"]["macro"]["F1"] <= 1.0
     assert spf["flow-cc"] > 0

@@ -7,6 +7,7 @@ timed. Seconds per frame = total method time / total frames.
 from __future__ import annotations
 
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Callable
@@ -42,6 +43,8 @@ def run_benchmark(
     Returns:
         ``(results, seconds_per_frame)``: per method the dict of
         :func:`motionbits.eval.dataset.evaluate_dataset`, and its mean seconds per frame.
+        A method that raises ImportError (its package or model is not installed) is
+        dropped with a warning on stderr instead of stopping the run.
 
     Raises:
         ValueError: a method returned a label map of the wrong shape (names the scene).
@@ -59,14 +62,22 @@ def run_benchmark(
     by_track: dict[str, dict[str, list[FrameScores]]] = {m: {} for m in methods}
     per_scene: dict[str, dict] = {m: {} for m in methods}
     seconds = {m: 0.0 for m in methods}
+    unavailable: dict[str, str] = {}
     n_frames = 0
     for scene in tqdm(scenes, desc="benchmark", unit="scene", disable=not progress):
         frames = load_frames(scene)
         gt, ignore = load_ground_truth(scene)
         n_frames += len(frames)
         for name, method in methods.items():
+            if name in unavailable:
+                continue
             t0 = time.perf_counter()
-            pred = np.asarray(method(frames))
+            try:
+                pred = np.asarray(method(frames))
+            except ImportError as exc:
+                unavailable[name] = str(exc)
+                print(f"benchmark: skipping method {name}: {exc}", file=sys.stderr)
+                continue
             seconds[name] += time.perf_counter() - t0
             if pred.shape != gt.shape:
                 raise ValueError(f"method {name} returned shape {pred.shape} for scene "
@@ -78,11 +89,15 @@ def run_benchmark(
                 write_label_map(Path(save_pred) / name / scene.track / f"{scene.name}.png", pred)
     results = {}
     for name in methods:
+        if name in unavailable:
+            continue
         tracks = {t: summarize(fs) for t, fs in by_track[name].items()}
         results[name] = {
             "macro": average_blocks([s["macro"] for s in tracks.values()]),
             "pooled": average_blocks([s["pooled"] for s in tracks.values()]),
             "tracks": tracks, "per_scene": per_scene[name],
         }
-    spf = {m: seconds[m] / max(n_frames, 1) for m in methods}
+    if not results:
+        raise ImportError(f"no method could run: {unavailable}")
+    spf = {m: seconds[m] / max(n_frames, 1) for m in results}
     return results, spf
