@@ -317,9 +317,11 @@ class MJCFScene:
         )
         self.init_qpos[f"lid{n}"] = -phi0  # negative: the lid rotates up from closed
         # Lid point at 75% of its length, on the screen side.
-        s = 0.75 * 2 * d
+        s = 0.92 * 2 * d
         hinge = np.array([x, y + d, 2 * t])
-        # On the screen face (the lid's -z side, facing forward and down when open).
+        # On the screen face (the lid's -z side, facing forward and down when open), near the
+        # top edge: the lid leans towards the pusher, so a lower contact would let the
+        # pusher's fingers hit the lid above it before the clip starts.
         point = hinge + np.array([0, -s * np.cos(phi0), s * np.sin(phi0)])
         point += 0.0015 * np.array([0, -np.sin(phi0), -np.cos(phi0)])
         part = Part(f"art{n}", "laptop", np.asarray(xy, float), float(np.hypot(w, d)),
@@ -366,6 +368,7 @@ class MJCFScene:
         amb = self.rng.uniform(0.15, 0.35)
         return (
             '<mujoco model="motionbits_scene">'
+            '<compiler angle="radian"/>'  # joint ranges and euler angles are in radians
             f'<option timestep="{timestep}" gravity="0 0 -9.81"/>'
             f'<visual><global offwidth="{self.width}" offheight="{self.height}"/>'
             f'<quality shadowsize="1024"/>'
