@@ -174,3 +174,41 @@ def test_bad_input_errors():
     with pytest.raises(ValueError, match="ignore"):
         evaluate_frame(np.zeros((5, 5), np.int32), np.zeros((5, 5), np.int32),
                        np.zeros((4, 4), bool))
+
+
+def _blobs(rng, shape, n):
+    lab = np.zeros(shape, np.int32)
+    for k in range(1, n + 1):
+        y, x = rng.integers(0, shape[0] - 8), rng.integers(0, shape[1] - 8)
+        h, w = rng.integers(4, 16, 2)
+        lab[y : y + h, x : x + w] = k
+    return lab
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_label_values_do_not_matter_and_self_match_is_perfect(seed):
+    rng = np.random.default_rng(seed)
+    gt, pred = _blobs(rng, (48, 64), 5), _blobs(rng, (48, 64), 6)
+    perm = rng.permutation(1000)[: pred.max() + 1] + 1
+    perm[0] = 0
+    a, b = evaluate_frame(pred, gt), evaluate_frame(perm[pred], gt)
+    for name in ("iou", "precision", "recall", "f1", "bprecision", "brecall", "bf1"):
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name))
+    assert a.pooled == pytest.approx(b.pooled)
+    s = evaluate_frame(gt, gt)
+    assert s.f1.size == 0 or (s.f1.min() == 1.0 and s.bf1.min() == 1.0)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_boundary_hits_match_euclidean_distance_transform(seed):
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    gt = _blobs(rng, (40, 50), 1)
+    pred = np.roll(gt, (int(rng.integers(-3, 4)), int(rng.integers(-3, 4))), axis=(0, 1))
+    s = evaluate_frame(pred, gt, tolerance=2)
+    bg, bp = boundary_map(gt), boundary_map(pred)
+    dist_to_g = ndimage.distance_transform_edt(~bg)
+    dist_to_p = ndimage.distance_transform_edt(~bp)
+    np.testing.assert_allclose(s.bprecision[0], np.mean(dist_to_g[bp] <= 2))
+    np.testing.assert_allclose(s.brecall[0], np.mean(dist_to_p[bg] <= 2))
