@@ -37,7 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     from motionbits.baselines import available_methods, make_method
     from motionbits.eval.benchmark import run_benchmark
-    from motionbits.eval.table import format_table
+    from motionbits.eval.table import format_table, json_ready
 
     if args.list:
         for name, desc in available_methods().items():
@@ -57,5 +57,5 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         payload = {"methods": results, "seconds_per_frame": spf}
-        Path(args.json).write_text(json.dumps(payload, indent=1))
+        Path(args.json).write_text(json.dumps(json_ready(payload), indent=1, allow_nan=False))
     return 0

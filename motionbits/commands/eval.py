@@ -46,7 +46,7 @@ def parse_pred_spec(spec: str) -> tuple[str, Path]:
 
 def run(args: argparse.Namespace) -> int:
     from motionbits.eval.dataset import evaluate_dataset
-    from motionbits.eval.table import format_table
+    from motionbits.eval.table import format_table, json_ready
 
     results = {}
     for spec in args.pred:
@@ -64,5 +64,5 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         payload = next(iter(results.values())) if len(results) == 1 else {"methods": results}
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(payload, indent=1, allow_nan=True))
+        Path(args.json).write_text(json.dumps(json_ready(payload), indent=1, allow_nan=False))
     return 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["format_table"]
+__all__ = ["format_table", "json_ready"]
 
 _COLS = ("P", "R", "F1", "mIoU", "BP", "BR", "BF1")
 
@@ -60,3 +60,14 @@ def format_table(
             lines.append(row)
         lines.append("")
     return "\n".join(lines).rstrip() + "\n"
+
+
+def json_ready(obj):
+    """Copy of nested dicts/lists with NaN floats replaced by None (strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, float) and math.isnan(obj):
+        return None
+    return obj
