@@ -10,6 +10,9 @@ import sys
 COMMAND_MODULES = (
     "motionbits.commands.segment",
     "motionbits.commands.bench",
+    "motionbits.commands.eval",
+    "motionbits.commands.synth",
+    "motionbits.commands.benchmark",
 )
 
 

@@ -1,0 +1,33 @@
+"""Benchmark methods: a registry of plug-ins ``frames -> last-frame label map``.
+
+Built in (no model weights): ``flow-cc`` (flow threshold + connected components),
+``affine-ransac`` (sequential-RANSAC affine motion clusters) and ``motionbits`` (the
+segmenter, imported when first used). Add more with :func:`register_method` or an entry
+point in the group ``motionbits.methods``.
+"""
+
+from motionbits.baselines.registry import (
+    Method, MethodInfo, available_methods, make_method, register_method,
+)
+
+
+def _flow_cc(**kw):
+    from motionbits.baselines.flow_threshold import FlowThresholdCC
+    return FlowThresholdCC(**kw)
+
+
+def _affine(**kw):
+    from motionbits.baselines.affine_clusters import AffineMotionClusters
+    return AffineMotionClusters(**kw)
+
+
+def _motionbits(**kw):
+    from motionbits.baselines.motionbits_method import MotionBitsMethod
+    return MotionBitsMethod(**kw)
+
+
+register_method("flow-cc", _flow_cc, "DIS flow magnitude > 1 px at any time + connected components")
+register_method("affine-ransac", _affine, "sequential-RANSAC affine motion clusters on chained DIS flow")
+register_method("motionbits", _motionbits, "MotionBits (motionbits.segment_video), paper defaults")
+
+__all__ = ["Method", "MethodInfo", "available_methods", "make_method", "register_method"]

@@ -1,0 +1,68 @@
+"""``motionbits eval``: score predicted label maps against a MoRiBo-format ground truth."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+__all__ = ["register", "run", "parse_pred_spec"]
+
+
+def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "eval",
+        help="score final-frame predictions on MoRiBo-format data (paper Table 2 layout)",
+        description=(
+            "Overlap P/R/F1/mIoU and Boundary P/R/F1 with Hungarian matching, macro-averaged "
+            "over GT instances (paper section 6.1), per track and averaged over tracks. "
+            "--pred holds per scene <scene>.png or a 'motionbits segment' output folder "
+            "<scene>/ (its last labels/NNNNN.png is used)."
+        ),
+    )
+    p.add_argument("--pred", required=True, action="append", metavar="[NAME=]DIR",
+                   help="prediction folder; repeat for several methods (row name = NAME or "
+                        "the folder name)")
+    p.add_argument("--gt", required=True, metavar="DIR",
+                   help="MoRiBo scene, track (folder of scenes) or folder of tracks")
+    p.add_argument("--json", metavar="FILE", help="write all scores (fractions in [0,1]) here")
+    p.add_argument("--pooled", action="store_true",
+                   help="also print the pooled per-image (UOIS/OCID) table with %%75")
+    p.add_argument("--missing", choices=("error", "empty"), default="error",
+                   help="a scene without prediction: fail (default) or score it as empty")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+    return p
+
+
+def parse_pred_spec(spec: str) -> tuple[str, Path]:
+    """``"name=dir"`` -> (name, dir); ``"dir"`` -> (folder name, dir)."""
+    if "=" in spec and not Path(spec).exists():
+        name, _, folder = spec.partition("=")
+        return name, Path(folder)
+    path = Path(spec)
+    return path.resolve().name, path
+
+
+def run(args: argparse.Namespace) -> int:
+    from motionbits.eval.dataset import evaluate_dataset
+    from motionbits.eval.table import format_table, json_ready
+
+    results = {}
+    for spec in args.pred:
+        name, folder = parse_pred_spec(spec)
+        if not folder.is_dir():
+            raise FileNotFoundError(f"prediction folder not found: {folder}")
+        if name in results:
+            raise ValueError(f"two --pred share the name {name!r}; use NAME=DIR")
+        results[name] = evaluate_dataset(args.gt, folder, missing=args.missing,
+                                         progress=not args.quiet)
+    print(format_table(results, block="macro"), end="")
+    if args.pooled:
+        print()
+        print(format_table(results, block="pooled"), end="")
+    if args.json:
+        payload = next(iter(results.values())) if len(results) == 1 else {"methods": results}
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(json_ready(payload), indent=1, allow_nan=False))
+    return 0

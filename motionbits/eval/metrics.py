@@ -1,0 +1,247 @@
+"""MoRiBo-protocol scores of one frame and their aggregation over a dataset.
+
+Protocol (paper section 6.1; DESIGN.md section 3), on the final frame of each video:
+
+1. Every (GT object g, predicted object p) pair gets the overlap F of
+   P = tp/|P|, R = tp/|G| (``overlap.py``).
+2. Hungarian assignment maximising the total F (``matching.py``); pairs with no common
+   pixel are not matches.
+3. **Per GT instance** (the paper's numbers): its matched pair gives IoU, P, R, F1 and, on the
+   same assignment, Boundary P, R, F1 (``boundary.py``). An unmatched GT object scores 0 on
+   everything.
+4. **Macro average** ("each instance weighted equally"): the mean of each per-instance number
+   over all GT instances of the dataset (or track). F1 is the mean of the per-instance F1,
+   not the F1 of the mean P and R. Unmatched *predictions* add no instance and so do not
+   lower the macro numbers; they show up only in the pooled variant. A video whose GT is
+   empty contributes no instance to the macro average.
+5. **Pooled per image** (UOIS/OCID, Xie et al. 2021), averaged over images:
+   P = sum of matched tp / all predicted object pixels (unmatched predictions included),
+   R = sum of matched tp / all GT object pixels, F1 = 2PR/(P+R); Boundary likewise with
+   boundary-pixel hits over all predicted / GT boundary pixels; mIoU = mean IoU of the
+   image's GT objects; pct75 = fraction of the image's GT objects with overlap F1 >= 0.75
+   (UOIS uses > 0.75). Edge cases as in the UOIS code: no GT and no prediction -> all 1;
+   GT but no prediction -> P = BP = 1, everything else 0; prediction but no GT ->
+   R = BR = 1, everything else 0.
+6. **%75** in the macro block: fraction of all GT instances with overlap F1 >= 0.75.
+
+An optional ignore mask removes pixels from both maps: they count in no tp, |P| or |G|,
+they are no boundary pixels, and a contour between a kept and an ignored pixel is dropped
+in both maps (so the edge of the ignored region creates no artificial contour).
+
+F1 >= 0.75 is tested with a 1e-9 slack so that an exact 3/4 (e.g. P = 1, R = 0.6) counts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable
+
+import numpy as np
+from scipy import ndimage
+
+from motionbits.eval.boundary import boundary_map, boundary_tolerance, disk, pair_boundary_hits
+from motionbits.eval.matching import hungarian_match
+from motionbits.eval.overlap import contingency, overlap_scores
+
+__all__ = ["FrameScores", "evaluate_frame", "summarize", "METRIC_KEYS", "INSTANCE_KEYS"]
+
+#: Keys of a summary block, in the paper's Table 2 column order (plus %75).
+METRIC_KEYS = ("P", "R", "F1", "mIoU", "BP", "BR", "BF1", "pct75")
+#: Overlap F1 threshold of the %75 figure.
+F75 = 0.75
+#: Per-instance arrays of :class:`FrameScores` behind the macro keys.
+INSTANCE_KEYS = {"P": "precision", "R": "recall", "F1": "f1", "mIoU": "iou",
+                 "BP": "bprecision", "BR": "brecall", "BF1": "bf1"}
+
+
+def _f1(p: np.ndarray | float, r: np.ndarray | float) -> np.ndarray:
+    p, r = np.asarray(p, np.float64), np.asarray(r, np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(p + r > 0, 2 * p * r / (p + r), 0.0)
+
+
+@dataclass
+class FrameScores:
+    """Scores of one (prediction, GT) pair of label maps.
+
+    Per-instance arrays have shape (K,) float64, one entry per GT object in ``gt_ids`` order;
+    unmatched GT objects have 0 everywhere and ``matched_pred`` 0.
+    """
+
+    gt_ids: np.ndarray
+    pred_ids: np.ndarray
+    matched_pred: np.ndarray
+    iou: np.ndarray
+    precision: np.ndarray
+    recall: np.ndarray
+    f1: np.ndarray
+    bprecision: np.ndarray
+    brecall: np.ndarray
+    bf1: np.ndarray
+    pooled: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def n_gt(self) -> int:
+        return int(self.gt_ids.size)
+
+    @property
+    def n_pred(self) -> int:
+        return int(self.pred_ids.size)
+
+    def macro(self) -> dict[str, float]:
+        """Macro block of this frame alone (mean over its GT instances; NaN if none)."""
+        return summarize([self])["macro"]
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary: counts, this frame's macro and pooled blocks, per instance."""
+        return {
+            "n_gt": self.n_gt,
+            "n_pred": self.n_pred,
+            "macro": self.macro(),
+            "pooled": dict(self.pooled),
+            "instances": [
+                {"gt": int(g), "pred": int(p), "P": float(a), "R": float(b), "F1": float(c),
+                 "IoU": float(d), "BP": float(e), "BR": float(f), "BF1": float(h)}
+                for g, p, a, b, c, d, e, f, h in zip(
+                    self.gt_ids, self.matched_pred, self.precision, self.recall, self.f1,
+                    self.iou, self.bprecision, self.brecall, self.bf1)
+            ],
+        }
+
+
+def _pooled_edge_case(k: int, m: int) -> dict[str, float] | None:
+    if k == 0 and m == 0:
+        return {key: 1.0 for key in METRIC_KEYS}
+    if m == 0:
+        out = {key: 0.0 for key in METRIC_KEYS}
+        out["P"] = out["BP"] = 1.0
+        return out
+    if k == 0:
+        out = {key: 0.0 for key in METRIC_KEYS}
+        out["R"] = out["BR"] = 1.0
+        return out
+    return None
+
+
+def evaluate_frame(
+    pred: np.ndarray,
+    gt: np.ndarray,
+    ignore: np.ndarray | None = None,
+    *,
+    tolerance: int | None = None,
+) -> FrameScores:
+    """Score a predicted label map against the ground truth (formulas: module docstring).
+
+    Args:
+        pred: (H, W) non-negative integer predicted labels, 0 = background; any label values.
+        gt: (H, W) non-negative integer GT labels, 0 = background; any label values.
+        ignore: optional (H, W) bool, True = pixel left out of both maps.
+        tolerance: boundary match tolerance in px; default ``ceil(0.003 * diagonal)``.
+
+    Returns:
+        :class:`FrameScores` with per-GT-instance arrays and the pooled block.
+
+    Raises:
+        ValueError / TypeError: shapes differ or a map is malformed.
+    """
+    c = contingency(pred, gt, ignore)
+    pred = np.asarray(pred).astype(np.int64, copy=False)
+    gt = np.asarray(gt).astype(np.int64, copy=False)
+    k, m = c.gt_ids.size, c.pred_ids.size
+    sc = overlap_scores(c)
+    rows, cols = hungarian_match(sc["F"])
+
+    zeros = lambda: np.zeros(k, np.float64)  # noqa: E731
+    iou, prec, rec, f1, bprec, brec = zeros(), zeros(), zeros(), zeros(), zeros(), zeros()
+    matched = np.zeros(k, np.int64)
+    iou[rows] = sc["IoU"][rows, cols]
+    prec[rows] = sc["P"][rows, cols]
+    rec[rows] = sc["R"][rows, cols]
+    f1[rows] = sc["F"][rows, cols]
+    matched[rows] = c.pred_ids[cols]
+
+    # Boundaries on the full maps, then ignored pixels dropped.
+    keep = np.ones(gt.shape, bool) if ignore is None else ~np.asarray(ignore, bool)
+    g_idx = _index_map(gt, c.gt_ids, keep)
+    p_idx = _index_map(pred, c.pred_ids, keep)
+    b_gt = boundary_map(gt, keep)
+    b_pred = boundary_map(pred, keep)
+    nb_gt = np.bincount(g_idx[b_gt], minlength=k + 1)[1:]
+    nb_pred = np.bincount(p_idx[b_pred], minlength=m + 1)[1:]
+    tol = boundary_tolerance(gt.shape) if tolerance is None else int(tolerance)
+    kernel = disk(tol)
+    g_sl = ndimage.find_objects(g_idx.astype(np.int32), max_label=k) if k else []
+    p_sl = ndimage.find_objects(p_idx.astype(np.int32), max_label=m) if m else []
+    hits_p = np.zeros(len(rows), np.int64)
+    hits_r = np.zeros(len(rows), np.int64)
+    for n, (r, col) in enumerate(zip(rows, cols)):
+        win = _union_window(g_sl[r], p_sl[col], tol, gt.shape)
+        bg = b_gt[win] & (g_idx[win] == r + 1)
+        bp = b_pred[win] & (p_idx[win] == col + 1)
+        hits_p[n], hits_r[n] = pair_boundary_hits(bg, bp, tol, kernel)
+        # A boundary with no pixel (object filling the image) is vacuously matched.
+        bprec[r] = hits_p[n] / nb_pred[col] if nb_pred[col] else 1.0
+        brec[r] = hits_r[n] / nb_gt[r] if nb_gt[r] else 1.0
+    bf1 = _f1(bprec, brec)
+
+    pooled = _pooled_edge_case(k, m)
+    if pooled is None:
+        tp = float(c.tp[rows, cols].sum())
+        p_all = tp / float(c.pred_sizes.sum())
+        r_all = tp / float(c.gt_sizes.sum())
+        bp_all = hits_p.sum() / nb_pred.sum() if nb_pred.sum() else 1.0
+        br_all = hits_r.sum() / nb_gt.sum() if nb_gt.sum() else 1.0
+        pooled = {
+            "P": p_all, "R": r_all, "F1": float(_f1(p_all, r_all)), "mIoU": float(iou.mean()),
+            "BP": float(bp_all), "BR": float(br_all), "BF1": float(_f1(bp_all, br_all)),
+            "pct75": float(np.mean(f1 >= F75 - 1e-9)),
+        }
+    return FrameScores(
+        gt_ids=c.gt_ids, pred_ids=c.pred_ids, matched_pred=matched, iou=iou, precision=prec,
+        recall=rec, f1=f1, bprecision=bprec, brecall=brec, bf1=bf1,
+        pooled={key: float(v) for key, v in pooled.items()},
+    )
+
+
+def _index_map(labels: np.ndarray, ids: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """(H, W) int64 compact index (1..K for ``ids``, 0 elsewhere and at ignored pixels)."""
+    out = np.zeros(labels.shape, np.int64)
+    if ids.size:
+        pos = np.searchsorted(ids, labels)
+        pos = np.minimum(pos, ids.size - 1)
+        hit = (ids[pos] == labels) & keep & (labels > 0)
+        out[hit] = pos[hit] + 1
+    return out
+
+
+def _union_window(a: tuple[slice, slice] | None, b: tuple[slice, slice] | None, tol: int,
+                  shape: tuple[int, int]) -> tuple[slice, slice]:
+    boxes = [s for s in (a, b) if s is not None]
+    y0 = max(0, min(s[0].start for s in boxes) - tol - 1)
+    y1 = min(shape[0], max(s[0].stop for s in boxes) + tol + 1)
+    x0 = max(0, min(s[1].start for s in boxes) - tol - 1)
+    x1 = min(shape[1], max(s[1].stop for s in boxes) + tol + 1)
+    return slice(y0, y1), slice(x0, x1)
+
+
+def summarize(frames: Iterable[FrameScores]) -> dict:
+    """Aggregate frames into the macro (per GT instance) and pooled (per image) blocks.
+
+    Returns:
+        ``{"macro": {key: float}, "pooled": {key: float}, "n_images": int,
+        "n_instances": int}`` with keys ``METRIC_KEYS``; fractions in [0, 1]. The macro block
+        is NaN when there is no GT instance; the pooled block when there is no image.
+    """
+    frames = list(frames)
+    n_inst = sum(f.n_gt for f in frames)
+    macro: dict[str, float] = {}
+    for key, attr in INSTANCE_KEYS.items():
+        vals = np.concatenate([getattr(f, attr) for f in frames]) if frames else np.zeros(0)
+        macro[key] = float(vals.mean()) if vals.size else float("nan")
+    f1s = np.concatenate([f.f1 for f in frames]) if frames else np.zeros(0)
+    macro["pct75"] = float(np.mean(f1s >= F75 - 1e-9)) if f1s.size else float("nan")
+    pooled = {
+        key: (float(np.mean([f.pooled[key] for f in frames])) if frames else float("nan"))
+        for key in METRIC_KEYS
+    }
+    return {"macro": macro, "pooled": pooled, "n_images": len(frames), "n_instances": n_inst}

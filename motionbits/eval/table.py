@@ -1,0 +1,73 @@
+"""The paper's Table 2 layout: rows = methods, Overlap P R F1 mIoU and Boundary P R F1 in %."""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["format_table", "json_ready"]
+
+_COLS = ("P", "R", "F1", "mIoU", "BP", "BR", "BF1")
+
+
+def _pct(v: float | None) -> str:
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{100 * v:.1f}"
+
+
+def format_table(
+    results: dict[str, dict],
+    *,
+    block: str = "macro",
+    seconds_per_frame: dict[str, float] | None = None,
+) -> str:
+    """Render per-track and track-averaged tables for several methods.
+
+    Args:
+        results: ``{method: evaluate_dataset(...) result}``.
+        block: ``"macro"`` (the paper's numbers) or ``"pooled"`` (UOIS variant; adds %75).
+        seconds_per_frame: optional ``{method: s}``, printed as a last column.
+
+    Returns:
+        The table as text, one section per track and one "average over tracks".
+    """
+    if not results:
+        raise ValueError("no results to tabulate")
+    cols = _COLS + (("pct75",) if block == "pooled" else ())
+    heads = ["P", "R", "F1", "mIoU", "P", "R", "F1"] + (["%75"] if block == "pooled" else [])
+    name_w = max(12, *(len(m) for m in results))
+    timing = seconds_per_frame or {}
+    time_head = "  s/frame" if timing else ""
+    lines = []
+    group = " " * (name_w + 2) + f"{'Overlap':^28}" + f"{'Boundary':^21}"
+    header = f"{'Method':<{name_w}}  " + "".join(f"{h:>7}" for h in heads) + time_head
+    tracks: list[str] = []
+    for res in results.values():
+        tracks += [t for t in res["tracks"] if t not in tracks]
+    sections = [(t, lambda r, t=t: r["tracks"].get(t, {}).get(block)) for t in tracks]
+    if len(tracks) > 1:
+        sections.append(("average over tracks", lambda r: r[block]))
+    for title, pick in sections:
+        counts = ""
+        if title in tracks:
+            first = next(r for r in results.values() if title in r["tracks"])["tracks"][title]
+            counts = f" ({first['n_images']} scenes, {first['n_instances']} GT instances)"
+        lines += [f"[{block}] {title}{counts}", group, header, "-" * len(header)]
+        for method, res in results.items():
+            vals = pick(res) or {}
+            row = f"{method:<{name_w}}  " + "".join(f"{_pct(vals.get(c)):>7}" for c in cols)
+            if timing:
+                t = timing.get(method)
+                row += f"{t:>9.3f}" if t is not None else f"{'-':>9}"
+            lines.append(row)
+        lines.append("")
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def json_ready(obj):
+    """Copy of nested dicts/lists with NaN floats replaced by None (strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, float) and math.isnan(obj):
+        return None
+    return obj

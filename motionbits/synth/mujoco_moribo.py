@@ -1,0 +1,138 @@
+"""Write MuJoCo clips as MoRiBo-format scenes, one track at a time.
+
+Scene folder: ``frames/00000.jpg ...`` (RGB, JPEG quality 95), ``gt.png`` (16-bit labels of
+the last frame), ``ignore.png`` (only if some body's motion was ambiguous: 255 = ignored) and
+``meta.json`` (seed, camera, labels -> bodies, max deviations, the push). Deterministic for
+a seed on one machine (same MuJoCo build and renderer).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+from tqdm import tqdm
+
+from motionbits.synth.mujoco_backend import import_mujoco
+from motionbits.synth.mujoco_scenes import TRACKS, ScenePlan, compose_scene
+from motionbits.synth.mujoco_sim import MOVED_M, STATIC_M, SimulatedClip, simulate
+
+__all__ = ["generate_scene", "write_scene", "generate_track", "scene_seed"]
+
+_MAX_ATTEMPTS = 12
+GENERATOR_VERSION = 1
+
+
+def scene_seed(seed: int, track: str, index: int, attempt: int = 0) -> list[int]:
+    """Entropy of scene ``index`` of ``track`` (independent streams per scene and attempt)."""
+    return [int(seed), TRACKS.index(track), int(index), int(attempt)]
+
+
+def generate_scene(track: str, seed: int, index: int = 0, *, width: int = 640, height: int = 480,
+                   n_frames: int | None = None) -> tuple[SimulatedClip, ScenePlan, dict]:
+    """Draw, simulate and render one scene; retry other draws until one is plausible.
+
+    A draw is kept if the simulation stayed plausible (nothing exploded or fell off the
+    table) and the push moved at least one body besides the pusher.
+
+    Returns:
+        ``(clip, plan, meta)``; ``meta`` is what ``meta.json`` holds.
+
+    Raises:
+        RuntimeError: no plausible draw in a dozen attempts (should not happen).
+    """
+    if track not in TRACKS:
+        raise ValueError(f"unknown track {track!r}; choose one of {TRACKS}")
+    mujoco = import_mujoco()
+    reasons = []
+    for attempt in range(_MAX_ATTEMPTS):
+        rng = np.random.default_rng(scene_seed(seed, track, index, attempt))
+        try:
+            plan = compose_scene(track, rng, width=width, height=height)
+        except ValueError as exc:
+            reasons.append(str(exc))
+            continue
+        clip = simulate(plan, width=width, height=height, n_frames=n_frames)
+        movers = [r for r in clip.label_of_root if clip.body_names[r] != "pusher"]
+        if clip.valid and movers:
+            return clip, plan, _meta(clip, plan, track, seed, index, attempt, mujoco.__version__)
+        reasons.append("implausible simulation" if not clip.valid else "the push moved nothing")
+    raise RuntimeError(f"no plausible scene for {track} seed {seed} index {index}: {reasons}")
+
+
+def _kind(name: str, plan: ScenePlan) -> str:
+    if name == "pusher":
+        return "gripper" if plan.track == "robot" else "hand"
+    return dict(plan.parts).get(name, "link")
+
+
+def _meta(clip: SimulatedClip, plan: ScenePlan, track: str, seed: int, index: int,
+          attempt: int, mj_version: str) -> dict:
+    h, w = clip.gt.shape
+    labels = {}
+    for root, lab in sorted(clip.label_of_root.items(), key=lambda kv: kv[1]):
+        name = clip.body_names[root]
+        labels[str(lab)] = {
+            "body": name, "kind": _kind(name, plan),
+            "max_deviation_m": round(float(clip.deviation[root]), 5),
+            "pixels": int(np.count_nonzero(clip.gt == lab)),
+        }
+    ignored = [clip.body_names[r] for r in range(len(clip.body_names))
+               if STATIC_M <= clip.deviation[r] < MOVED_M]
+    return {
+        "format": "MoRiBo", "generator": "motionbits.synth.mujoco", "version": GENERATOR_VERSION,
+        "mujoco": mj_version, "track": track, "seed": int(seed), "index": int(index),
+        "attempt": int(attempt), "width": int(w), "height": int(h),
+        "n_frames": int(clip.frames.shape[0]), "fps": round(1.0 / plan.frame_dt, 3),
+        "camera": {**asdict(plan.camera), "fovy_deg": 45.0},
+        "push": {"target": plan.target[0], "target_kind": plan.target[1],
+                 "start": [round(float(v), 4) for v in plan.start],
+                 "end": [round(float(v), 4) for v in plan.end]},
+        "thresholds_m": {"moved": MOVED_M, "static": STATIC_M},
+        "labels": labels, "ignored_bodies": ignored,
+        "parts": [{"name": n, "kind": k} for n, k in plan.parts],
+        "gt_definition": "last-frame pixels of every rigid body (geom -> body -> body_weldid) "
+                         "whose max deviation over the clip >= thresholds_m.moved",
+    }
+
+
+def write_scene(folder: str | os.PathLike, clip: SimulatedClip, meta: dict) -> Path:
+    """Write one scene folder in MoRiBo format; return its path."""
+    from motionbits.eval.labelmaps import write_label_map
+
+    folder = Path(folder)
+    (folder / "frames").mkdir(parents=True, exist_ok=True)
+    for k, frame in enumerate(clip.frames):
+        Image.fromarray(frame).save(folder / "frames" / f"{k:05d}.jpg", quality=95)
+    write_label_map(folder / "gt.png", clip.gt)
+    if clip.ignore.any():
+        Image.fromarray(clip.ignore.astype(np.uint8) * 255).save(folder / "ignore.png")
+    (folder / "meta.json").write_text(json.dumps(meta, indent=1))
+    return folder
+
+
+def generate_track(track: str, n_scenes: int, seed: int, out: str | os.PathLike, *,
+                   width: int = 640, height: int = 480, n_frames: int | None = None,
+                   progress: bool = True) -> list[Path]:
+    """Generate ``n_scenes`` scenes of ``track`` into ``out/<track>/scene_NNNN``.
+
+    Returns:
+        The scene folders, in order.
+    """
+    if n_scenes < 1:
+        raise ValueError(f"n_scenes must be >= 1, got {n_scenes}")
+    root = Path(out) / track
+    paths = []
+    t0 = time.perf_counter()
+    for i in tqdm(range(n_scenes), desc=f"synth {track}", unit="scene", disable=not progress):
+        clip, _, meta = generate_scene(track, seed, i, width=width, height=height, n_frames=n_frames)
+        paths.append(write_scene(root / f"scene_{i:04d}", clip, meta))
+    if progress:
+        dt = time.perf_counter() - t0
+        print(f"{track}: {n_scenes} scenes in {dt:.1f} s ({dt / n_scenes:.2f} s/scene) -> {root}")
+    return paths
