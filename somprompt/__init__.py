@@ -1,0 +1,1 @@
+"""Set-of-Mark prompting from label maps (temporary init, completed below)."""
