@@ -78,7 +78,7 @@ class MarkRegistry:
         self.style: MarkStyle = style
         self._number: dict[int, int] = {}
         self._id: dict[int, int] = {}
-        self._frames: dict[int, list[int]] = {}
+        self._frames: dict[int, set[int]] = {}
 
     # -- building --------------------------------------------------------------------
     def register(self, ids: Iterable[int]) -> None:
@@ -107,9 +107,7 @@ class MarkRegistry:
         self.register(ids)
         if frame_index is not None:
             for i in ids:
-                seen = self._frames.setdefault(i, [])
-                if not seen or seen[-1] != frame_index:
-                    seen.append(int(frame_index))
+                self._frames.setdefault(i, set()).add(int(frame_index))
         return ids
 
     @classmethod
@@ -158,8 +156,8 @@ class MarkRegistry:
         return None if n is None else self._id.get(n)
 
     def frames_seen(self, obj_id: int) -> list[int]:
-        """Frame indices passed to :meth:`update` in which ``obj_id`` was present."""
-        return list(self._frames.get(int(obj_id), []))
+        """Frame indices passed to :meth:`update` in which ``obj_id`` was present, sorted."""
+        return sorted(self._frames.get(int(obj_id), ()))
 
     def __repr__(self) -> str:
         pairs = ", ".join(f"{i}->{self.text(i)}" for i in self.ids[:8])
