@@ -101,8 +101,8 @@ class MaskAnnotator(_Annotator):
         >>> frame = np.zeros((4, 4, 3), np.uint8); labels = np.zeros((4, 4), int)
         >>> labels[1:3, 1:3] = 1
         >>> out = MaskAnnotator(opacity=1.0).annotate(frame, labels)
-        >>> tuple(out[1, 1]), tuple(out[0, 0])
-        ((230, 25, 75), (0, 0, 0))
+        >>> out[1, 1].tolist(), out[0, 0].tolist()
+        ([230, 25, 75], [0, 0, 0])
     """
 
     def __init__(self, palette: ColorPalette | None = None, opacity: float = 0.45) -> None:
