@@ -28,8 +28,7 @@ import cv2
 import numpy as np
 
 import somprompt
-
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+from motionbits.video import iter_frames  # a script may use both packages; somprompt may not
 
 
 def read_label_maps(folder: Path) -> dict[int, np.ndarray]:
@@ -50,25 +49,12 @@ def read_label_maps(folder: Path) -> dict[int, np.ndarray]:
 
 def read_frames(video: Path, wanted: set[int]) -> dict[int, np.ndarray]:
     """Frame index -> (H, W, 3) RGB frame, for the indices in ``wanted``."""
-    out = {}
-    if video.is_dir():
-        files = sorted(p for p in video.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
-        for i in wanted:
-            if i < len(files):
-                out[i] = cv2.cvtColor(cv2.imread(str(files[i]), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
-        return out
-    cap = cv2.VideoCapture(str(video))
-    if not cap.isOpened():
-        sys.exit(f"error: could not open {video} as a video")
-    i, last = 0, max(wanted)
-    while i <= last:
-        ok, bgr = cap.read()
-        if not ok:
-            break
+    out, last = {}, max(wanted)
+    for i, frame in enumerate(iter_frames(video)):
         if i in wanted:
-            out[i] = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-        i += 1
-    cap.release()
+            out[i] = frame
+        if i >= last:
+            break
     return out
 
 
