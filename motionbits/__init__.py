@@ -1,6 +1,15 @@
 """MotionBits: learning-free segmentation of moving rigid bodies in RGB video."""
 
 from motionbits.config import MotionBitsConfig
+from motionbits.segmenter import MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video
+from motionbits.video import iter_frames
 
-__all__ = ["MotionBitsConfig"]
+__all__ = [
+    "MotionBit",
+    "MotionBitsConfig",
+    "MotionBitsResult",
+    "MotionBitsSegmenter",
+    "iter_frames",
+    "segment_video",
+]
 __version__ = "0.1.0"

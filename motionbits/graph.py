@@ -1,0 +1,112 @@
+"""The spatial-twist similarity graph (paper Sec. 5.1, BuildTwistSimGraph).
+
+Edge (i, j) for j in the k nearest neighbours of i has weight exp(-0.5 Mdist^2), the
+Mahalanobis distance of the twist difference under the covariance of the twists of N*(i).
+Six twists in 3-D give a near-singular covariance, so it is regularised with the covariance
+the fitted twist would have from ``flow_noise`` px of noise on each of the 6 points,
+sigma^2 (J^T J)^-1 with J the Jacobian of point velocities w.r.t. the twist: the regulariser
+carries the strong omega / v coupling of a twist expressed about a distant origin.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = ["local_covariances", "twist_edge_weights", "apply_temporal_constraints", "symmetric_graph"]
+
+
+def local_covariances(twists: np.ndarray, points: np.ndarray, neighbors: np.ndarray,
+                      flow_noise: float) -> np.ndarray:
+    """Regularised covariance of the twists of each node's N* = {i} + neighbours.
+
+    Args:
+        twists: (n, 3) twists [omega, v_x, v_y].
+        points: (n, 2) node positions (x, y) about the image origin.
+        neighbors: (n, k) neighbour indices.
+        flow_noise: flow noise standard deviation in px.
+
+    Returns:
+        (n, 3, 3) float64 symmetric positive-definite covariances.
+    """
+    idx = np.concatenate([np.arange(len(twists))[:, None], neighbors], axis=1)
+    v = twists[idx]  # (n, m, 3)
+    vc = v - v.mean(axis=1, keepdims=True)
+    sample = np.einsum("nmi,nmj->nij", vc, vc) / (idx.shape[1] - 1)
+    # J^T J for velocities u(p) = omega * (-y, x) + v over the m points of N*
+    p = points.astype(np.float64)[idx]
+    x, y = p[..., 0], p[..., 1]
+    m = float(idx.shape[1])
+    jtj = np.empty((len(twists), 3, 3))
+    jtj[:, 0, 0] = (x * x + y * y).sum(1)
+    jtj[:, 0, 1] = jtj[:, 1, 0] = -y.sum(1)
+    jtj[:, 0, 2] = jtj[:, 2, 0] = x.sum(1)
+    jtj[:, 1, 1] = jtj[:, 2, 2] = m
+    jtj[:, 1, 2] = jtj[:, 2, 1] = 0.0
+    return sample + flow_noise**2 * np.linalg.inv(jtj)
+
+
+def twist_edge_weights(twists: np.ndarray, neighbors: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """(n, k) weights exp(-0.5 * Mdist(i, j)^2) of the edges i -> neighbors[i, s]."""
+    diff = twists[neighbors] - twists[:, None, :]  # (n, k, 3)
+    prec = np.linalg.inv(cov)  # (n, 3, 3)
+    d2 = np.einsum("nki,nij,nkj->nk", diff, prec, diff)
+    return np.exp(-0.5 * np.maximum(d2, 0.0))
+
+
+def apply_temporal_constraints(weights: np.ndarray, neighbors: np.ndarray, history: np.ndarray,
+                               past_max: np.ndarray) -> np.ndarray:
+    """Edge removal and addition from earlier label maps (paper Sec. 5.1).
+
+    ``history`` is the per-node class of the meet of all earlier label partitions carried
+    to the current frame (0 = background at every earlier frame): two nodes share a class
+    iff they shared a label at every earlier frame.
+
+    - Separated at some earlier frame (different classes): the edge is removed.
+    - Together in a MotionBit at every earlier frame (same non-zero class): the edge is
+      added with the largest earlier weight (kept at the current one if that is larger).
+    - Never moved (both class 0): the current twist similarity decides alone.
+
+    Args:
+        weights: (n, k) current edge weights.
+        neighbors: (n, k) neighbour indices.
+        history: (n,) int history class of each node.
+        past_max: (n, k) largest earlier weight of each edge, projected to this frame.
+
+    Returns:
+        (n, k) constrained weights.
+    """
+    hi = history[:, None]
+    hj = history[neighbors]
+    out = np.where(hi != hj, 0.0, weights)
+    together = (hi == hj) & (hi != 0)
+    return np.where(together, np.maximum(out, past_max), out)
+
+
+def symmetric_graph(weights: np.ndarray, neighbors: np.ndarray, keep: np.ndarray | None = None
+                    ) -> sp.csr_matrix:
+    """Sparse symmetric affinity W = max(W, W^T) over the k-NN edges.
+
+    Args:
+        weights: (n, k) weights of the edges i -> neighbors[i, s].
+        neighbors: (n, k) neighbour indices.
+        keep: optional (n,) bool; the graph is induced on these nodes and re-indexed in
+            their order (``np.flatnonzero(keep)``).
+
+    Returns:
+        (m, m) CSR matrix, m = n or keep.sum().
+    """
+    n, k = neighbors.shape
+    rows = np.repeat(np.arange(n), k)
+    cols = neighbors.ravel()
+    vals = weights.ravel()
+    if keep is not None:
+        new_index = np.full(n, -1, np.int64)
+        new_index[keep] = np.arange(int(keep.sum()))
+        rows, cols = new_index[rows], new_index[cols]
+        ok = (rows >= 0) & (cols >= 0)
+        rows, cols, vals = rows[ok], cols[ok], vals[ok]
+        n = int(keep.sum())
+    ok = vals > 0
+    w = sp.csr_matrix((vals[ok], (rows[ok], cols[ok])), shape=(n, n))
+    return w.maximum(w.T).tocsr()

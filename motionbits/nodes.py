@@ -1,0 +1,81 @@
+"""The node grid (paper Sec. 5.1, SampleNodes): positions, neighbours, flow samples."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["NodeGrid", "sample_bilinear"]
+
+
+@dataclass(frozen=True)
+class NodeGrid:
+    """A ``rows x cols`` grid of nodes over an ``height x width`` image, with k-NN lists.
+
+    Attributes:
+        points: (n, 2) float32 (x, y) node positions, row-major, cell centres.
+        neighbors: (n, k) int32 indices of each node's k nearest grid nodes (itself
+            excluded; ties broken by index, so the lists are deterministic).
+        rows, cols, height, width: grid and image sizes.
+    """
+
+    points: np.ndarray
+    neighbors: np.ndarray
+    rows: int
+    cols: int
+    height: int
+    width: int
+
+    @classmethod
+    def build(cls, height: int, width: int, side: int, k: int) -> "NodeGrid":
+        """A ``side x side`` grid (the paper's sqrt(n) x sqrt(n)) over an image."""
+        rows = cols = side
+        xs = (np.arange(cols, dtype=np.float32) + 0.5) * (width / cols)
+        ys = (np.arange(rows, dtype=np.float32) + 0.5) * (height / rows)
+        gx, gy = np.meshgrid(xs, ys)
+        points = np.stack([gx.ravel(), gy.ravel()], axis=1).astype(np.float32)
+        _, idx = cKDTree(points).query(points, k=k + 1)
+        # the query returns each node first (distance 0); drop it
+        neighbors = np.ascontiguousarray(idx[:, 1:], dtype=np.int32)
+        return cls(points, neighbors, rows, cols, height, width)
+
+    @property
+    def n(self) -> int:
+        return self.points.shape[0]
+
+    @property
+    def cell(self) -> tuple[float, float]:
+        """(cell width, cell height) in pixels."""
+        return self.width / self.cols, self.height / self.rows
+
+    def nearest_node(self, xy: np.ndarray) -> np.ndarray:
+        """(m,) int index of the grid node nearest to each (m, 2) (x, y) position (clamped)."""
+        cw, ch = self.cell
+        c = np.clip(np.floor(xy[:, 0] / cw), 0, self.cols - 1).astype(np.int64)
+        r = np.clip(np.floor(xy[:, 1] / ch), 0, self.rows - 1).astype(np.int64)
+        return r * self.cols + c
+
+    def to_image(self, node_values: np.ndarray) -> np.ndarray:
+        """Nearest-node upsampling of (n,) values to an (height, width) map."""
+        grid = node_values.reshape(self.rows, self.cols)
+        return cv2.resize(grid, (self.width, self.height), interpolation=cv2.INTER_NEAREST)
+
+
+def sample_bilinear(field: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Bilinear samples of an (H, W, C) float32 field at (n, 2) (x, y) points -> (n, C)."""
+    h, w = field.shape[:2]
+    x = np.clip(points[:, 0].astype(np.float32), 0, w - 1)
+    y = np.clip(points[:, 1].astype(np.float32), 0, h - 1)
+    x0 = np.minimum(np.floor(x).astype(np.int64), w - 2) if w > 1 else np.zeros(x.shape, np.int64)
+    y0 = np.minimum(np.floor(y).astype(np.int64), h - 2) if h > 1 else np.zeros(y.shape, np.int64)
+    fx = (x - x0)[:, None]
+    fy = (y - y0)[:, None]
+    x1 = np.minimum(x0 + 1, w - 1)
+    y1 = np.minimum(y0 + 1, h - 1)
+    f = field.reshape(h, w, -1)
+    top = f[y0, x0] * (1 - fx) + f[y0, x1] * fx
+    bottom = f[y1, x0] * (1 - fx) + f[y1, x1] * fx
+    return (top * (1 - fy) + bottom * fy).astype(np.float32)

@@ -1,0 +1,373 @@
+"""The online MotionBits segmenter (paper Algorithm 1)."""
+
+from __future__ import annotations
+
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Iterator
+
+import cv2
+import numpy as np
+from scipy import ndimage
+from scipy.sparse.csgraph import connected_components
+
+from motionbits.config import MotionBitsConfig
+from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
+from motionbits.graph import (
+    apply_temporal_constraints,
+    local_covariances,
+    symmetric_graph,
+    twist_edge_weights,
+)
+from motionbits.identity import match_ids, refine_history
+from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
+from motionbits.mcl import markov_cluster, normalized_similarity
+from motionbits.nodes import NodeGrid, sample_bilinear
+from motionbits.propagation import grid_seeds, propagate_labels
+from motionbits.twists import fit_local_motions, se2_log
+from motionbits.video import FrameSource, as_rgb_frame, iter_frames
+
+__all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
+
+#: Stage names of the per-frame timing report, in pipeline order.
+STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "bookkeeping")
+
+
+@dataclass(frozen=True)
+class MotionBit:
+    """One MotionBit in one frame (coordinates in input pixels).
+
+    Attributes:
+        id: stable id (> 0), kept across frames.
+        area: pixels in the mask.
+        bbox: (x0, y0, x1, y1), inclusive-exclusive.
+        centroid: (x, y).
+        twist: (omega rad/frame, v_x, v_y px/frame) spatial twist of the motion from the
+            previous frame, about the image origin; zeros when it has no cluster this frame.
+        moving: whether it moved between the previous frame and this one.
+        first_moved, last_moved: frame indices of its first and latest motion.
+    """
+
+    id: int
+    area: int
+    bbox: tuple[int, int, int, int]
+    centroid: tuple[float, float]
+    twist: tuple[float, float, float]
+    moving: bool
+    first_moved: int
+    last_moved: int
+
+
+@dataclass
+class MotionBitsResult:
+    """Output of :meth:`MotionBitsSegmenter.update` for one frame.
+
+    Attributes:
+        frame_index: 0-based index of the frame in the stream.
+        labels: (H, W) int32 at the input size; 0 = background, k > 0 = MotionBit k.
+        motionbits: one record per id present in ``labels``.
+        node_labels: (rows, cols) int32 MotionBit id of every grid node (0 = none).
+        timings: milliseconds spent per stage (see ``STAGES``).
+    """
+
+    frame_index: int
+    labels: np.ndarray
+    motionbits: list[MotionBit]
+    node_labels: np.ndarray
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def ids(self) -> list[int]:
+        return [mb.id for mb in self.motionbits]
+
+
+class MotionBitsSegmenter:
+    """Online, learning-free segmentation of moving rigid bodies.
+
+    Feed frames one at a time with :meth:`update`; each call returns the MotionBits of that
+    frame using only the frames seen so far. The first frame returns all-background labels.
+    State is constant in size: the previous frame, the previous label map, one integer map
+    of the label history and the largest past weight of each graph edge.
+
+    Args:
+        config: parameters; defaults are the paper's.
+        flow: a flow backend ``flow(prev, next) -> (H, W, 2)``; default from ``config.flow``.
+
+    Example:
+        >>> from motionbits import MotionBitsSegmenter
+        >>> from motionbits.synth import demo_clip
+        >>> clip = demo_clip(n_frames=4, size=(120, 160))
+        >>> seg = MotionBitsSegmenter()
+        >>> for frame in clip.frames:
+        ...     result = seg.update(frame)
+        >>> result.labels.shape
+        (120, 160)
+    """
+
+    def __init__(self, config: MotionBitsConfig | None = None, flow: FlowBackend | None = None):
+        self.config = config or MotionBitsConfig()
+        self.flow = make_flow(flow if flow is not None else self.config.flow)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the stream: the next frame is treated as the first."""
+        self.frame_index = -1
+        self._input_size: tuple[int, int] | None = None
+        self._work_size: tuple[int, int] | None = None
+        self._grid: NodeGrid | None = None
+        self._seeds: np.ndarray | None = None
+        self._prev: np.ndarray | None = None
+        self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
+        self._history: np.ndarray | None = None  # (h, w) int32 meet of all label partitions
+        self._past_max: np.ndarray | None = None  # (n, k) largest earlier edge weights
+        self._next_id = 1
+        self._first_moved: dict[int, int] = {}
+        self._last_moved: dict[int, int] = {}
+        self._timings: dict[str, float] = {}
+
+    # ------------------------------------------------------------------ helpers
+    @contextmanager
+    def _stage(self, name: str) -> Iterator[None]:
+        t0 = time.perf_counter()
+        yield
+        self._timings[name] = self._timings.get(name, 0.0) + 1000 * (time.perf_counter() - t0)
+
+    def _start(self, frame: np.ndarray) -> None:
+        h, w = frame.shape[:2]
+        scale = self.config.max_side / max(h, w)
+        self._input_size = (h, w)
+        self._work_size = (max(8, int(round(h * scale))), max(8, int(round(w * scale))))
+        hw, ww = self._work_size
+        self._grid = NodeGrid.build(hw, ww, self.config.grid_side, self.config.k_neighbors)
+        self._seeds = grid_seeds(self._grid.rows, self._grid.cols, self.config.seed_stride)
+        self._labels = np.zeros((hw, ww), np.int32)
+        self._history = np.zeros((hw, ww), np.int32)
+        self._past_max = np.zeros(self._grid.neighbors.shape)
+
+    def _to_work(self, frame: np.ndarray) -> np.ndarray:
+        hw, ww = self._work_size
+        if frame.shape[:2] == (hw, ww):
+            return frame
+        interp = cv2.INTER_AREA if hw < frame.shape[0] else cv2.INTER_LINEAR
+        return cv2.resize(frame, (ww, hw), interpolation=interp)
+
+    def _empty_result(self) -> MotionBitsResult:
+        h, w = self._input_size
+        g = self._grid
+        return MotionBitsResult(self.frame_index, np.zeros((h, w), np.int32), [],
+                                np.zeros((g.rows, g.cols), np.int32), dict(self._timings))
+
+    # ------------------------------------------------------------------ main step
+    def update(self, frame: np.ndarray) -> MotionBitsResult:
+        """Segment the next frame of the stream.
+
+        Args:
+            frame: (H, W, 3) uint8 RGB (grayscale (H, W) and RGBA are converted). Every frame
+                of a stream must have the same size.
+
+        Returns:
+            :class:`MotionBitsResult` with labels at the input size.
+        """
+        frame = as_rgb_frame(frame, name=f"frame {self.frame_index + 1}")
+        self._timings = {}
+        if self._input_size is not None and frame.shape[:2] != self._input_size:
+            raise ValueError(
+                f"frame {self.frame_index + 1} is {frame.shape[1]}x{frame.shape[0]} but the stream "
+                f"started at {self._input_size[1]}x{self._input_size[0]}; call reset() for a new video"
+            )
+        self.frame_index += 1
+        if self._input_size is None:
+            self._start(frame)
+        with self._stage("resize"):
+            cur = self._to_work(frame)
+        if self._prev is None:
+            self._prev = cur
+            return self._empty_result()
+        cfg, grid = self.config, self._grid
+        with self._stage("flow"):
+            flow_fwd = self.flow(self._prev, cur)
+            flow_back = self.flow(cur, self._prev)
+            fb_err = forward_backward_error(flow_back, flow_fwd)
+
+        with self._stage("twists"):
+            pts = grid.points
+            back_pts = pts + sample_bilinear(flow_back, pts)
+            node_err = sample_bilinear(np.minimum(fb_err, 1e3)[..., None], pts)[:, 0]
+            reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
+            motions = fit_local_motions(pts, back_pts, grid.neighbors, reliability,
+                                        cfg.ransac_threshold)
+
+        with self._stage("graph"):
+            prior_valid = fb_err < cfg.fb_sigma
+            prior = warp_nearest(self._labels, flow_back)
+            history = warp_nearest(self._history, flow_back)
+            ix = np.clip(np.round(pts).astype(np.int64), 0, [grid.width - 1, grid.height - 1])
+            hist_nodes = history[ix[:, 1], ix[:, 0]]
+            prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
+            cov = local_covariances(motions.twist, pts, grid.neighbors, cfg.flow_noise)
+            raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
+            past = self._project_past_max(back_pts)
+            weights = apply_temporal_constraints(raw, grid.neighbors, hist_nodes, past)
+            self._past_max = np.maximum(past, raw)
+            # eq. 4: a node belongs to the moving set if it moves now or was part of a
+            # MotionBit at the last frame; enclosed holes (e.g. near a centre of rotation,
+            # where points barely move but share the body's twist) are filled.
+            active = (motions.displacement > cfg.move_threshold) | (prior_nodes != 0)
+            active = ndimage.binary_fill_holes(active.reshape(grid.rows, grid.cols)).ravel()
+            w = symmetric_graph(weights, grid.neighbors, keep=active)
+            active_idx = np.flatnonzero(active)
+
+        with self._stage("propagation"):
+            seed_mask = np.zeros(grid.n, bool)
+            seed_mask[self._seeds] = True
+            seeds = np.flatnonzero(seed_mask[active_idx])
+            b = propagate_labels(w, seeds, cfg.propagation_iters, cfg.reseed_every)
+
+        with self._stage("clustering"):
+            cluster = self._cluster(b, w)
+            node_cluster = np.zeros(grid.n, np.int64)
+            node_cluster[active_idx] = cluster
+
+        with self._stage("masks"):
+            node_ids, ids, thetas, trans = self._identify(
+                node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability)
+            kept = np.setdiff1d(np.unique(prior_nodes[prior_nodes > 0]), ids)
+            kept = np.union1d(kept, np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids))
+            labels = assign_pixels(grid, node_ids, ids, thetas, trans, flow_back, prior,
+                                   prior_valid, cfg.prior_bonus, kept, cfg.move_threshold)
+            cw, ch = grid.cell
+            labels = remove_specks(labels, min_area=int(np.ceil(2 * cw * ch)))
+
+        with self._stage("bookkeeping"):
+            self._history = refine_history(history, labels, margin=int(np.ceil(max(grid.cell))))
+            self._labels = labels
+            self._prev = cur
+            result = self._result(labels, node_ids, ids, thetas, trans, pts)
+        result.timings = dict(self._timings)
+        return result
+
+    def _project_past_max(self, back_pts: np.ndarray) -> np.ndarray:
+        """Largest earlier weight of each current edge, read from the graph of the previous
+        frame at the nodes nearest to where the edge's endpoints came from."""
+        grid = self._grid
+        src = grid.nearest_node(back_pts)
+        si = src[:, None]
+        sj = src[grid.neighbors]
+        hit = grid.neighbors[si[:, 0]][:, None, :] == sj[:, :, None]  # (n, k, k)
+        vals = np.where(hit, self._past_max[si[:, 0]][:, None, :], 0.0)
+        return vals.max(axis=2)
+
+    def _cluster(self, b: np.ndarray, w) -> np.ndarray:
+        """Cluster indices 1..K of the active nodes: MCL on rows of B that received paint;
+        nodes that no seed reached are grouped by graph connectivity."""
+        m = b.shape[0]
+        out = np.zeros(m, np.int64)
+        if m == 0:
+            return out
+        painted = b.sum(axis=1) > 0
+        cfg = self.config
+        if painted.any():
+            lab, _ = markov_cluster(
+                normalized_similarity(b[painted]), expansion=cfg.mcl_expansion,
+                inflation=cfg.mcl_inflation, prune=cfg.mcl_prune, max_iters=cfg.mcl_max_iters,
+                stable_iters=cfg.mcl_stable_iters)
+            out[painted] = lab + 1
+        if (~painted).any():
+            sub = w[~painted][:, ~painted]
+            _, comp = connected_components(sub, directed=False)
+            out[~painted] = out.max() + 1 + comp
+        return out
+
+    def _identify(self, node_cluster, displacement, prior_nodes, pts, back_pts, reliability):
+        """Drop noise clusters, give each cluster a stable id and fit its motion.
+
+        A cluster continues the earlier MotionBit it overlaps most (Hungarian on IoU); a
+        cluster that continues none is a new MotionBit only if it moves now (eq. 4), which
+        keeps static leftovers of a body's old place from becoming bodies of their own.
+        """
+        cfg = self.config
+        counts = np.bincount(node_cluster, minlength=1)
+        big = np.flatnonzero(counts >= cfg.min_cluster_nodes)
+        big = big[big > 0]
+        remap = np.zeros(len(counts), np.int64)
+        remap[big] = np.arange(1, len(big) + 1)
+        cluster = remap[node_cluster]
+        matched = match_ids(cluster, prior_nodes, len(big), cfg.match_iou)
+        grid = cluster.reshape(self._grid.rows, self._grid.cols)
+        # a node is interior iff its 3x3 neighbourhood holds one cluster value only
+        interior = (ndimage.maximum_filter(grid, 3, mode="nearest")
+                    == ndimage.minimum_filter(grid, 3, mode="nearest")).ravel()
+        has_interior = np.bincount(cluster[interior], minlength=len(big) + 1) > 0
+        ids = []
+        for c in range(1, len(big) + 1):
+            if c in matched:
+                ids.append(matched[c])
+            elif has_interior[c] and np.median(displacement[cluster == c]) > cfg.move_threshold:
+                ids.append(self._next_id)
+                self._next_id += 1
+            else:
+                ids.append(0)
+        ids = np.asarray(ids, np.int64)
+        node_ids = np.concatenate([[0], ids])[cluster]
+        ids = ids[ids > 0]
+        thetas, trans = fit_cluster_motions(pts, back_pts, reliability, node_ids, ids,
+                                            cfg.ransac_threshold)
+        return node_ids, ids, thetas, trans
+
+    def _result(self, labels, node_ids, ids, thetas, trans, pts) -> MotionBitsResult:
+        grid = self._grid
+        h, w = self._input_size
+        scale = w / grid.width, h / grid.height
+        twists = {int(i): -se2_log(th, t) for i, th, t in zip(ids, thetas, trans)}
+        out = labels
+        if (h, w) != labels.shape:
+            out = cv2.resize(labels, (w, h), interpolation=cv2.INTER_NEAREST)
+        records = []
+        present = np.unique(out[out > 0])
+        for lab in present:
+            lab = int(lab)
+            tw = twists.get(lab, np.zeros(3))
+            sel = node_ids == lab
+            moving = False
+            if sel.any():
+                th, t = thetas[ids == lab][0], trans[ids == lab][0]
+                c, s = np.cos(th), np.sin(th)
+                p = pts[sel]
+                moved = p @ np.array([[c, s], [-s, c]]) + t - p
+                moving = float(np.mean(np.linalg.norm(moved, axis=1))) > self.config.move_threshold
+            if moving:
+                self._first_moved.setdefault(lab, self.frame_index)
+                self._last_moved[lab] = self.frame_index
+            ys, xs = np.nonzero(out == lab)
+            records.append(MotionBit(
+                id=lab, area=int(len(xs)),
+                bbox=(int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1),
+                centroid=(float(xs.mean()), float(ys.mean())),
+                twist=(float(tw[0]), float(tw[1] * scale[0]), float(tw[2] * scale[1])),
+                moving=moving,
+                first_moved=self._first_moved.get(lab, self.frame_index),
+                last_moved=self._last_moved.get(lab, self.frame_index),
+            ))
+        return MotionBitsResult(self.frame_index, out, records,
+                                node_ids.reshape(grid.rows, grid.cols).astype(np.int32))
+
+
+def segment_video(source: FrameSource, config: MotionBitsConfig | None = None, *,
+                  flow: FlowBackend | None = None, every: int = 1) -> Iterator[MotionBitsResult]:
+    """Segment a whole video, yielding one :class:`MotionBitsResult` per processed frame.
+
+    Args:
+        source: a video file, a folder of images, a (T, H, W, 3) uint8 array or an iterable
+            of frames (see :func:`motionbits.video.iter_frames`).
+        config: segmenter parameters.
+        flow: optional flow backend.
+        every: process every ``every``-th frame (temporal subsampling); ``frame_index`` of
+            each result counts processed frames.
+    """
+    if every < 1:
+        raise ValueError(f"every must be >= 1, got {every}")
+    seg = MotionBitsSegmenter(config, flow=flow)
+    for i, frame in enumerate(iter_frames(source)):
+        if i % every == 0:
+            yield seg.update(frame)

@@ -1,0 +1,146 @@
+"""Local SE(2) spatial twists (paper Sec. 5.1, EstimateLocalTwists).
+
+For every node, its k nearest neighbours plus itself (N*) give point pairs
+p (current frame) -> q = p + F(t->t-1)(p) (previous frame). A rigid motion q ~ R p + t is
+fitted by RANSAC over minimal 2-point sets -- with 6 points there are only 15 pairs, so all
+of them are tried (deterministic) -- and refined by weighted Kabsch on the inliers. The
+motion is expressed about the image origin (the fixed frame {s}), where every point of one
+rigid body has the same spatial twist V_s = [omega, v_x, v_y]; twists are reported for the
+forward motion t-1 -> t. Everything is vectorised over all nodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+__all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp"]
+
+
+@dataclass(frozen=True)
+class LocalMotions:
+    """Per-node rigid fits.
+
+    Attributes:
+        twist: (n, 3) float64 spatial twists [omega (rad/frame), v_x, v_y (px/frame)] of the
+            forward motion t-1 -> t, about the image origin.
+        angle: (n,) float64 rotation of the backward motion (current -> previous), radians.
+        trans: (n, 2) float64 translation of the backward motion.
+        displacement: (n,) float64 |motion of the node itself| in px, from the fit.
+        inliers: (n, m) bool RANSAC inliers among each node's m = k + 1 points.
+    """
+
+    twist: np.ndarray
+    angle: np.ndarray
+    trans: np.ndarray
+    displacement: np.ndarray
+    inliers: np.ndarray
+
+
+def _rot(theta: np.ndarray) -> np.ndarray:
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def kabsch_2d(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted least-squares rigid motion q ~ R(theta) p + t, batched.
+
+    Args:
+        p, q: (..., m, 2) point sets.
+        w: (..., m) non-negative weights (a batch item with all-zero weights gets the
+            identity rotation).
+
+    Returns:
+        theta (...,) and t (..., 2).
+    """
+    ws = w.sum(-1, keepdims=True)
+    ws_safe = np.where(ws > 0, ws, 1.0)
+    pm = (w[..., None] * p).sum(-2) / ws_safe
+    qm = (w[..., None] * q).sum(-2) / ws_safe
+    pc = p - pm[..., None, :]
+    qc = q - qm[..., None, :]
+    cross = (w * (pc[..., 0] * qc[..., 1] - pc[..., 1] * qc[..., 0])).sum(-1)
+    dot = (w * (pc[..., 0] * qc[..., 0] + pc[..., 1] * qc[..., 1])).sum(-1)
+    theta = np.arctan2(cross, dot)
+    t = qm - (_rot(theta) @ pm[..., None])[..., 0]
+    return theta, t
+
+
+def se2_log(theta: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Twist [omega, v_x, v_y] of the SE(2) element (R(theta), t), batched: (...,) , (..., 2) -> (..., 3)."""
+    half = 0.5 * theta
+    small = np.abs(theta) < 1e-4
+    # a = (theta / 2) cot(theta / 2), with its series near 0
+    a = np.where(small, 1.0 - theta**2 / 12.0, half / np.tan(np.where(small, 1.0, half)))
+    vx = a * t[..., 0] + half * t[..., 1]
+    vy = -half * t[..., 0] + a * t[..., 1]
+    return np.stack([theta, vx, vy], -1)
+
+
+def se2_exp(twist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse of :func:`se2_log`: (..., 3) twists -> theta (...,), t (..., 2)."""
+    theta = twist[..., 0]
+    small = np.abs(theta) < 1e-4
+    th = np.where(small, 1.0, theta)
+    s = np.where(small, 1.0 - theta**2 / 6.0, np.sin(th) / th)
+    c = np.where(small, theta / 2.0, (1.0 - np.cos(th)) / th)
+    vx, vy = twist[..., 1], twist[..., 2]
+    return theta, np.stack([s * vx - c * vy, c * vx + s * vy], -1)
+
+
+def fit_local_motions(
+    points: np.ndarray,
+    back_points: np.ndarray,
+    neighbors: np.ndarray,
+    weights: np.ndarray,
+    inlier_threshold: float,
+) -> LocalMotions:
+    """RANSAC (all 2-point subsets) + weighted Kabsch for every node's neighbourhood.
+
+    Args:
+        points: (n, 2) node positions p in the current frame.
+        back_points: (n, 2) q = p + backward flow at p.
+        neighbors: (n, k) int neighbour indices; N* = the node plus these.
+        weights: (n,) reliability of each node's flow in [0, 1] (forward-backward
+            consistency); the Kabsch refit and the RANSAC score are weighted by it.
+        inlier_threshold: residual (px) under which a point is an inlier.
+
+    Returns:
+        :class:`LocalMotions`.
+    """
+    n = points.shape[0]
+    idx = np.concatenate([np.arange(n)[:, None], neighbors], axis=1)  # (n, m)
+    m = idx.shape[1]
+    p = points.astype(np.float64)[idx]  # (n, m, 2)
+    q = back_points.astype(np.float64)[idx]
+    w = weights.astype(np.float64)[idx]  # (n, m)
+
+    pairs = np.array(list(combinations(range(m), 2)))  # (P, 2)
+    pa, pb = p[:, pairs[:, 0]], p[:, pairs[:, 1]]  # (n, P, 2)
+    qa, qb = q[:, pairs[:, 0]], q[:, pairs[:, 1]]
+    dp, dq = pb - pa, qb - qa
+    theta = np.arctan2(dp[..., 0] * dq[..., 1] - dp[..., 1] * dq[..., 0],
+                       dp[..., 0] * dq[..., 0] + dp[..., 1] * dq[..., 1])  # (n, P)
+    rot = _rot(theta)  # (n, P, 2, 2)
+    t = 0.5 * (qa + qb) - (rot @ (0.5 * (pa + pb))[..., None])[..., 0]
+    pred = np.einsum("npij,nmj->npmi", rot, p) + t[:, :, None, :]  # (n, P, m, 2)
+    r2 = ((pred - q[:, None]) ** 2).sum(-1)  # (n, P, m)
+    tau2 = inlier_threshold**2
+    # MSAC cost: inliers pay their squared residual, outliers a constant
+    cost = (w[:, None, :] * np.minimum(r2, tau2)).sum(-1) + 1e-9 * np.arange(len(pairs))
+    best = np.argmin(cost, axis=1)
+    inliers = r2[np.arange(n), best] < tau2  # (n, m)
+    fit_w = w * inliers
+    # a neighbourhood without any weighted inlier falls back to all points, unweighted
+    none = fit_w.sum(1) <= 0
+    fit_w[none] = 1.0
+    ang, trans = kabsch_2d(p, q, fit_w)
+
+    own = points.astype(np.float64)
+    moved_to = (_rot(ang) @ own[..., None])[..., 0] + trans
+    displacement = np.linalg.norm(moved_to - own, axis=1)
+    twist = -se2_log(ang, trans)  # log(T^-1) = -log(T): forward motion
+    return LocalMotions(twist=twist, angle=ang, trans=trans, displacement=displacement,
+                        inliers=inliers)
