@@ -1,0 +1,289 @@
+"""From a VLM's free-text answer back to masks: which marks does it cite?
+
+Recognised citations (case-insensitive keywords; ``n`` = a mark number, ``x`` = a mark
+letter in the letter style):
+
+====================  ===============================================================
+form                  examples
+====================  ===============================================================
+square brackets       ``[3]``, ``[3, 5]``, ``[3][5]``, ``[3 and 5]``, ``[mark 3]``,
+                      ``[#3]``; letter style ``[a]``, ``[a, c]``, ``[a][b]``
+round brackets        ``(3)``, ``(3, 5)`` (at most 3 digits); letter style ``(a)``
+keyword + mark        ``mark 3``, ``Mark #3``, ``object 3``, ``objects 3, 5 and 7``,
+                      ``region 2``, ``label 4``, ``mask 1``, ``segment 2``, ``item 6``,
+                      ``body 3``, ``id 3``; letter style ``object A`` (upper case), or
+                      ``object a`` followed by punctuation, ``and``/``or`` or the end
+hash                  ``#3`` (not inside words, HTML entities or colours like ``#3cb44b``)
+====================  ===============================================================
+
+Not citations: bare numbers (``3 cups``, ``at 3 o'clock``, ``1. the cup``), decimals
+(``3.5``), numbers after a keyword that are followed by a unit (``object 3 cm away``),
+and four-digit numbers from 1800 to 2199 that are no known mark (years). Only tokens of
+the registry's style count: in the number style ``[a]`` is ignored, in the letter style
+``[3]`` is. Known limits: enumerations written ``(1) ... (2) ...`` read as citations;
+ranges such as ``[3-5]`` are not expanded.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Iterable
+
+import numpy as np
+
+from .inputs import check_label_map
+from .registry import MarkRegistry, MarkStyle, parse_mark_text
+
+__all__ = [
+    "Citation",
+    "ParsedAnswer",
+    "find_citations",
+    "parse_answer",
+    "masks_for_ids",
+    "NamedObject",
+    "parse_named_objects",
+]
+
+_KW = r"(?i:marks?|markers?|objects?|regions?|labels?|masks?|segments?|items?|ids?|bod(?:y|ies))"
+_SEP = r"(?:\s*[,;/&]\s*(?:(?i:and|or)\s+)?|\s+(?i:and|or)\s+)"
+_UNIT = (
+    r"(?i:%|°|mm|cm|m|km|in|inch(?:es)?|ft|feet|px|pixels?|deg(?:rees)?|o'?clock|s|sec(?:onds?)?"
+    r"|min(?:utes?)?|h|hours?|times|x|kg|g|fps)(?![A-Za-z])"
+)
+_NUM = r"\d{1,4}(?!\d|\.\d)"
+_NUM3 = r"\d{1,3}(?!\d|\.\d)"
+_NUM_KW = rf"{_NUM}(?!\s*{_UNIT})"
+_LET = r"[A-Za-z]{1,2}(?![A-Za-z0-9])"
+
+_PATTERNS: dict[str, list[re.Pattern]] = {
+    "number": [
+        re.compile(rf"\[\s*(?:{_KW}\s*)?#?({_NUM}(?:{_SEP}(?:{_KW}\s*)?#?{_NUM})*)\s*\]"),
+        re.compile(rf"\(\s*#?({_NUM3}(?:{_SEP}#?{_NUM3})*)\s*\)"),
+        re.compile(rf"\b{_KW}\s*(?:#\s?|(?i:no\.?|nr\.?|number)\s*)?({_NUM_KW}(?:{_SEP}#?{_NUM_KW})*)"),
+        re.compile(r"(?<![\w&#/])#\s?(\d{1,4})(?![\d\w]|\.\d)"),
+    ],
+    "letter": [
+        re.compile(rf"\[\s*(?:{_KW}\s*)?({_LET}(?:{_SEP}(?:{_KW}\s+)?{_LET})*)\s*\]"),
+        re.compile(r"\(\s*([A-Za-z])\s*\)"),
+        re.compile(rf"\b{_KW}\s+#?([A-Z])(?![A-Za-z0-9'])"),
+        re.compile(rf"\b{_KW}\s+#?([a-z])(?=\s*(?:[,.;:!?)\]]|$)|\s+(?i:and|or)\b)"),
+    ],
+}
+_TOKEN = {"number": re.compile(r"\d+"), "letter": re.compile(r"[A-Za-z]+")}
+_SEP_WORDS = {"and", "or"}
+_KW_WORDS = re.compile(rf"^{_KW}$")
+
+
+@dataclass(frozen=True)
+class Citation:
+    """One mark cited in an answer.
+
+    Attributes:
+        text: the mark as written, normalised (``"3"``, ``"c"``).
+        obj_id: the object id it refers to, or None if no such mark exists.
+        start, end: character span of the mark in the answer.
+    """
+
+    text: str
+    obj_id: int | None
+    start: int
+    end: int
+
+
+@dataclass
+class ParsedAnswer:
+    """What an answer cites.
+
+    Attributes:
+        answer: the answer text.
+        ids: object ids of the cited marks, in order of first mention, no repeats.
+        unknown: cited marks (as text) that do not exist, in order of first mention.
+        citations: every citation, in text order.
+        masks: object id -> (H, W) bool mask, for each cited id present in the label
+            map passed to :func:`parse_answer` (empty without one).
+        missing: cited ids that exist but are absent from that label map.
+    """
+
+    answer: str
+    ids: list[int]
+    unknown: list[str]
+    citations: list[Citation] = field(default_factory=list)
+    masks: dict[int, np.ndarray] = field(default_factory=dict)
+    missing: list[int] = field(default_factory=list)
+    shape: tuple[int, int] | None = None
+
+    @property
+    def label_map(self) -> np.ndarray | None:
+        """(H, W) int64 map holding only the cited objects (ids kept), or None without
+        a label map."""
+        if self.shape is None:
+            return None
+        out = np.zeros(self.shape, dtype=np.int64)
+        for i, m in self.masks.items():
+            out[m] = i
+        return out
+
+    @property
+    def mask(self) -> np.ndarray | None:
+        """(H, W) bool union of the cited masks, or None without a label map."""
+        lm = self.label_map
+        return None if lm is None else lm > 0
+
+
+def find_citations(answer: str, style: MarkStyle = "number") -> list[tuple[str, int, int]]:
+    """Mark tokens cited in ``answer`` (rules in the module doc), as
+    ``(text, start, end)`` in text order, one per occurrence.
+
+    Never raises on any string. Raises TypeError for non-strings.
+    """
+    if not isinstance(answer, str):
+        raise TypeError(f"answer must be a str, got {type(answer).__name__}")
+    if style not in _PATTERNS:
+        raise ValueError(f"unknown mark style {style!r}; use 'number' or 'letter'")
+    spans: dict[tuple[int, int], str] = {}
+    for pattern in _PATTERNS[style]:
+        for m in pattern.finditer(answer):
+            g_start = m.start(1)
+            for tok in _TOKEN[style].finditer(m.group(1)):
+                word = tok.group(0)
+                if style == "letter" and (word.lower() in _SEP_WORDS or _KW_WORDS.match(word)):
+                    continue
+                span = (g_start + tok.start(), g_start + tok.end())
+                spans.setdefault(span, word.lower() if style == "letter" else str(int(word)))
+    return [(text, s, e) for (s, e), text in sorted(spans.items())]
+
+
+def _looks_like_year(text: str) -> bool:
+    return len(text) == 4 and text.isdigit() and 1800 <= int(text) <= 2199
+
+
+def parse_answer(
+    answer: str,
+    marks: MarkRegistry | Iterable[int] | None = None,
+    labels: np.ndarray | None = None,
+    style: MarkStyle = "number",
+) -> ParsedAnswer:
+    """Find the marks an answer cites and return their masks.
+
+    Args:
+        answer: the VLM's text. Any string is accepted; garbage cites nothing.
+        marks: a :class:`MarkRegistry` (mark texts are mapped through it; its style is
+            used); or an iterable of object ids shown with number = id; or None: number
+            = id, and the ids present in ``labels`` (if given) are the known ones.
+        labels: (H, W) integer label map to take the masks from (e.g. the last frame's).
+        style: ``"number"`` or ``"letter"``, when ``marks`` is not a registry.
+
+    Returns:
+        :class:`ParsedAnswer`.
+
+    Example:
+        >>> import numpy as np
+        >>> labels = np.zeros((4, 4), int); labels[0, 0] = 3; labels[3, 3] = 5
+        >>> p = parse_answer("The cup [5] hit [3]; mark 9 and the 3 spoons stayed.", labels=labels)
+        >>> p.ids, p.unknown, int(p.masks[5].sum())
+        ([5, 3], ['9'], 1)
+    """
+    if not isinstance(answer, str):
+        raise TypeError(
+            f"answer must be the VLM's text (str), got {type(answer).__name__}; "
+            "if the VLM returned None it produced no answer"
+        )
+    lm = None if labels is None else check_label_map(labels)
+    present = None if lm is None else {int(i) for i in np.unique(lm) if i != 0}
+
+    if isinstance(marks, MarkRegistry):
+        style = marks.style
+        lookup = marks.id_for_text
+    else:
+        if marks is not None:
+            known = {int(i) for i in marks}
+        elif present is not None:
+            known = present
+        else:
+            known = None  # anything goes
+
+        def lookup(text: str) -> int | None:
+            n = parse_mark_text(text, style)
+            return n if n is not None and (known is None or n in known) else None
+
+    citations: list[Citation] = []
+    ids: list[int] = []
+    unknown: list[str] = []
+    for text, start, end in find_citations(answer, style):
+        obj_id = lookup(text)
+        if obj_id is None:
+            if style == "number" and (int(text) == 0 or _looks_like_year(text)):
+                continue  # "[0]" is no mark; "(2024)" is a year
+            if text not in unknown:
+                unknown.append(text)
+        elif obj_id not in ids:
+            ids.append(obj_id)
+        citations.append(Citation(text, obj_id, start, end))
+
+    masks: dict[int, np.ndarray] = {}
+    missing: list[int] = []
+    if lm is not None:
+        masks = masks_for_ids(lm, ids)
+        missing = [i for i in ids if i not in masks]
+    return ParsedAnswer(answer, ids, unknown, citations, masks, missing,
+                        None if lm is None else lm.shape)
+
+
+def masks_for_ids(labels: np.ndarray, ids: Iterable[int]) -> dict[int, np.ndarray]:
+    """Object id -> (H, W) bool mask, for each of ``ids`` present in ``labels``."""
+    lm = check_label_map(labels)
+    out = {}
+    for i in ids:
+        m = lm == int(i)
+        if m.any():
+            out[int(i)] = m
+    return out
+
+
+@dataclass(frozen=True)
+class NamedObject:
+    """One line of a ``- <name>: <description>`` answer (prompt ``moved_rigid_bodies``).
+
+    Attributes:
+        name: short noun phrase, lower case, no marks or markup: a detector text class.
+        description: the rest of the line.
+        marks: mark texts cited on the line (``som_moved_rigid_bodies`` format).
+    """
+
+    name: str
+    description: str
+    marks: tuple[str, ...] = ()
+
+
+_LINE = re.compile(r"^\s*(?:[-*\u2022]|\d{1,3}[.)])\s+(.+?)\s*$")
+_ARTICLE = re.compile(r"^(?:the|a|an)\s+", re.I)
+
+
+def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedObject]:
+    """Read the list format of the ``moved_rigid_bodies`` prompts: one object per line,
+    ``- <name>: <description>`` (also ``*``, ``•`` or ``1.`` bullets, ``**bold**``
+    names and leading marks ``- [1][2] red mug: ...``). The line ``- none: ...`` and
+    lines without a colon are skipped; names are de-duplicated (first kept).
+
+    Returns:
+        One :class:`NamedObject` per object line, in order; names suit YOLOE
+        ``set_classes``.
+    """
+    if not isinstance(answer, str):
+        raise TypeError(f"answer must be a str, got {type(answer).__name__}")
+    out: list[NamedObject] = []
+    seen: set[str] = set()
+    for line in answer.splitlines():
+        m = _LINE.match(line)
+        if not m or ":" not in m.group(1):
+            continue
+        head, desc = m.group(1).split(":", 1)
+        marks = tuple(t for t, _, _ in find_citations(head, style))
+        name = re.sub(r"\[[^\]]*\]|\([^)]*\)|[*_`\"]", " ", head)
+        name = _ARTICLE.sub("", " ".join(name.split())).strip(" .,-").lower()
+        if not name or name == "none" or name in seen:
+            continue
+        seen.add(name)
+        out.append(NamedObject(name, desc.strip().strip("*").strip(), marks))
+    return out

@@ -1,0 +1,109 @@
+"""Mark colours: a palette indexed by mark number, and legible text colours."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+__all__ = [
+    "Color", "ColorPalette", "to_hex", "relative_luminance", "contrast_ratio", "contrasting_color",
+]
+
+Color = tuple[int, int, int]
+"""An RGB colour, three ints in [0, 255]."""
+
+# Sasha Trubetskoy's "20 simple, distinct colours" (public), grey dropped, reordered so that
+# neighbouring mark numbers get very different hues.
+_DISTINCT = (
+    "#e6194b", "#3cb44b", "#4363d8", "#ffe119", "#f032e6", "#42d4f4", "#f58231", "#911eb4",
+    "#bfef45", "#800000", "#469990", "#fabed4", "#000075", "#9a6324", "#dcbeff", "#808000",
+    "#aaffc3", "#ffd8b1", "#fffac8",
+)
+
+
+def _hex_to_rgb(value: str) -> Color:
+    h = value.lstrip("#")
+    if len(h) != 6:
+        raise ValueError(f"colour {value!r} is not of the form '#rrggbb'")
+    try:
+        return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16))
+    except ValueError as exc:
+        raise ValueError(f"colour {value!r} is not of the form '#rrggbb'") from exc
+
+
+def _to_color(value: "str | Sequence[int]") -> Color:
+    if isinstance(value, str):
+        return _hex_to_rgb(value)
+    c = tuple(int(v) for v in value)
+    if len(c) != 3 or not all(0 <= v <= 255 for v in c):
+        raise ValueError(f"colour {value!r} must be three ints in [0, 255] (RGB)")
+    return c  # type: ignore[return-value]
+
+
+def to_hex(color: Color) -> str:
+    """``(230, 25, 75)`` -> ``'#e6194b'``."""
+    return "#{:02x}{:02x}{:02x}".format(*color)
+
+
+@dataclass(frozen=True)
+class ColorPalette:
+    """An ordered list of RGB colours; mark number ``n`` (1-based) gets colour ``n - 1``
+    modulo the palette length, so a mark keeps its colour as long as it keeps its number.
+
+    Args:
+        colors: RGB tuples or ``'#rrggbb'`` strings.
+
+    Example:
+        >>> pal = ColorPalette.from_hex(["#ff0000", "#00ff00"])
+        >>> pal.by_number(1), pal.by_number(3)
+        ((255, 0, 0), (255, 0, 0))
+    """
+
+    colors: tuple[Color, ...]
+
+    def __post_init__(self) -> None:
+        cols = tuple(_to_color(c) for c in self.colors)
+        if not cols:
+            raise ValueError("a ColorPalette needs at least one colour")
+        object.__setattr__(self, "colors", cols)
+
+    @classmethod
+    def default(cls) -> "ColorPalette":
+        """19 well-separated colours (Trubetskoy's list)."""
+        return cls(_DISTINCT)  # type: ignore[arg-type]
+
+    @classmethod
+    def from_hex(cls, values: Sequence[str]) -> "ColorPalette":
+        return cls(tuple(values))  # type: ignore[arg-type]
+
+    def __len__(self) -> int:
+        return len(self.colors)
+
+    def by_number(self, number: int) -> Color:
+        """Colour of mark number ``number`` (1-based)."""
+        return self.colors[(int(number) - 1) % len(self.colors)]
+
+
+def relative_luminance(color: Color) -> float:
+    """WCAG 2 relative luminance of an sRGB colour, in [0, 1]."""
+    c = np.asarray(color, dtype=np.float64) / 255.0
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return float(0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2])
+
+
+def contrast_ratio(a: Color, b: Color) -> float:
+    """WCAG 2 contrast ratio between two colours, in [1, 21]."""
+    la, lb = relative_luminance(a), relative_luminance(b)
+    hi, lo = max(la, lb), min(la, lb)
+    return (hi + 0.05) / (lo + 0.05)
+
+
+BLACK: Color = (0, 0, 0)
+WHITE: Color = (255, 255, 255)
+
+
+def contrasting_color(background: Color) -> Color:
+    """Black or white, whichever has the higher WCAG contrast against ``background``."""
+    return BLACK if contrast_ratio(BLACK, background) >= contrast_ratio(WHITE, background) else WHITE
