@@ -49,9 +49,13 @@ def attractor_labels(m: np.ndarray) -> np.ndarray:
     dest = np.argmax(m, axis=0)
     g = coo_matrix((np.ones(n), (np.arange(n), dest)), shape=(n, n))
     _, lab = connected_components(g, directed=True, connection="weak")
-    _, first = np.unique(lab, return_index=True)
-    order = np.argsort(np.argsort(first))
-    return order[lab]
+    return _by_first_appearance(lab)
+
+
+def _by_first_appearance(labels: np.ndarray) -> np.ndarray:
+    """Renumber labels 0..K-1 in the order they first appear."""
+    _, first = np.unique(labels, return_index=True)
+    return np.argsort(np.argsort(first))[labels]
 
 
 def _normalize_columns(m: np.ndarray, mult: np.ndarray) -> np.ndarray:
@@ -103,9 +107,7 @@ def markov_cluster(
         labels[idx] = lab + offset
         offset += int(lab.max()) + 1
         iters = max(iters, it)
-    _, first = np.unique(labels, return_index=True)
-    order = np.argsort(np.argsort(first))
-    return order[labels], iters
+    return _by_first_appearance(labels), iters
 
 
 def _mcl_block(x, mult, expansion, inflation, threshold, max_iters, stable_iters):

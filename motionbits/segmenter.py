@@ -236,8 +236,7 @@ class MotionBitsSegmenter:
         with self._stage("masks"):
             node_ids, ids, thetas, trans = self._identify(
                 node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability)
-            kept = np.setdiff1d(np.unique(prior_nodes[prior_nodes > 0]), ids)
-            kept = np.union1d(kept, np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids))
+            kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             labels = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_back, _gray(cur), _gray(self._prev),
                 prior, prior_valid, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,

@@ -144,9 +144,8 @@ def render_planar_clip(bodies: list[Body] | tuple[Body, ...], *, size: tuple[int
     rng = np.random.default_rng(seed)
     background = smooth_texture((h, w), rng, contrast=0.8)
     layers = [_body_layer(b, (hs, ws), seed * 1000 + i + 1) for i, b in enumerate(bodies)]
-    ids: dict[int, int] = {}
-    for i, b in enumerate(bodies):
-        ids[i] = len([v for v in ids.values() if v]) + 1 if b.moves(n_frames) else 0
+    movers = [i for i, b in enumerate(bodies) if b.moves(n_frames)]
+    ids = {i: movers.index(i) + 1 if i in movers else 0 for i in range(len(bodies))}
 
     frames = np.empty((n_frames, h, w, 3), np.uint8)
     labels = np.zeros((n_frames, h, w), np.int32)
