@@ -28,8 +28,8 @@ def row_stochastic(w: sp.csr_matrix) -> sp.csr_matrix:
     return sp.diags(inv) @ w
 
 
-def propagate_labels(w: sp.csr_matrix, seeds: np.ndarray, iters: int, reseed_every: int
-                     ) -> np.ndarray:
+def propagate_labels(w: sp.csr_matrix, seeds: np.ndarray, iters: int, reseed_every: int,
+                     dtype: type = np.float64, classes: np.ndarray | None = None) -> np.ndarray:
     """Diffuse one-hot seed labels over the graph.
 
     B(0) = Y; B(r+1) = A B(r); every ``reseed_every`` iterations B += Y ("pour more paint").
@@ -39,14 +39,20 @@ def propagate_labels(w: sp.csr_matrix, seeds: np.ndarray, iters: int, reseed_eve
         seeds: (C,) indices of seed nodes (into 0..m-1); seed c gets class c.
         iters: R, the number of diffusion steps.
         reseed_every: r*.
+        dtype: float type of the computation.
+        classes: optional (C,) column of each seed instead of c. Paint never crosses
+            between connected components of ``w``, so seeds of different components may
+            share a column: numbering seeds within their component gives the same
+            embedding with far fewer columns.
 
     Returns:
-        (m, C) float64 soft label embedding B(R).
+        (m, C') soft label embedding B(R) of type ``dtype``, C' = number of classes.
     """
     m = w.shape[0]
-    y = np.zeros((m, len(seeds)))
-    y[seeds, np.arange(len(seeds))] = 1.0
-    a = row_stochastic(w.tocsr())
+    classes = np.arange(len(seeds)) if classes is None else np.asarray(classes)
+    y = np.zeros((m, int(classes.max()) + 1 if len(classes) else 0), dtype)
+    y[seeds, classes] = 1.0
+    a = row_stochastic(w.tocsr()).astype(dtype)
     b = y.copy()
     for r in range(1, iters + 1):
         b = a @ b

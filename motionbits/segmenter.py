@@ -223,15 +223,31 @@ class MotionBitsSegmenter:
             active_idx = np.flatnonzero(active)
 
         with self._stage("propagation"):
+            # W is block-diagonal over its connected components and paint never crosses
+            # between them, so each component is propagated (and clustered) on its own
             seed_mask = np.zeros(grid.n, bool)
             seed_mask[self._seeds] = True
+            n_comp, comp = connected_components(w, directed=False)
             seeds = np.flatnonzero(seed_mask[active_idx])
-            b = propagate_labels(w, seeds, cfg.propagation_iters, cfg.reseed_every)
+            # number the seeds within their component: one column per seed of the largest
+            seed_comp = comp[seeds]
+            order = np.argsort(seed_comp, kind="stable")
+            starts = np.searchsorted(seed_comp[order], seed_comp[order])
+            classes = np.empty(len(seeds), np.int64)
+            classes[order] = np.arange(len(seeds)) - starts
+            b = propagate_labels(w, seeds, cfg.propagation_iters, cfg.reseed_every,
+                                 dtype=self._dtype, classes=classes)
+            n_seeds = np.bincount(seed_comp, minlength=n_comp)
 
         with self._stage("clustering"):
-            cluster = self._cluster(b, w)
+            painted = b.sum(axis=1) > 0
+            painted_total = int(painted.sum())
             node_cluster = np.zeros(grid.n, np.int64)
-            node_cluster[active_idx] = cluster
+            members_of = np.split(np.argsort(comp, kind="stable"),
+                                  np.cumsum(np.bincount(comp, minlength=n_comp))[:-1])
+            for c, members in enumerate(members_of):
+                cluster = self._cluster(b[members, :n_seeds[c]], w, members, painted_total)
+                node_cluster[active_idx[members]] = cluster + node_cluster.max()
 
         with self._stage("masks"):
             node_ids, ids, thetas, trans = self._identify(
@@ -263,9 +279,15 @@ class MotionBitsSegmenter:
         vals = np.where(hit, self._past_max[si[:, 0]][:, None, :], 0.0)
         return vals.max(axis=2)
 
-    def _cluster(self, b: np.ndarray, w) -> np.ndarray:
-        """Cluster indices 1..K of the active nodes: MCL on rows of B that received paint;
-        nodes that no seed reached are grouped by graph connectivity."""
+    @property
+    def _dtype(self) -> type:
+        return np.float64 if self.config.exact else np.float32
+
+    def _cluster(self, b: np.ndarray, w, members: np.ndarray, painted_total: int) -> np.ndarray:
+        """Cluster indices 1..K of the nodes ``members`` of one component of the graph ``w``:
+        MCL on their rows of B that received paint (pruning relative to ``painted_total``,
+        the painted nodes of the whole frame); nodes that no seed reached are grouped by
+        graph connectivity."""
         m = b.shape[0]
         out = np.zeros(m, np.int64)
         if m == 0:
@@ -276,10 +298,12 @@ class MotionBitsSegmenter:
             lab, _ = markov_cluster(
                 normalized_similarity(b[painted]), expansion=cfg.mcl_expansion,
                 inflation=cfg.mcl_inflation, prune=cfg.mcl_prune, max_iters=cfg.mcl_max_iters,
-                stable_iters=cfg.mcl_stable_iters)
+                stable_iters=None if cfg.exact else cfg.mcl_stable_iters,
+                prune_total=painted_total, dtype=self._dtype)
             out[painted] = lab + 1
         if (~painted).any():
-            sub = w[~painted][:, ~painted]
+            rest = members[~painted]
+            sub = w[rest][:, rest]
             _, comp = connected_components(sub, directed=False)
             out[~painted] = out.max() + 1 + comp
         return out

@@ -117,16 +117,23 @@ def fit_local_motions(
     q = back_points.astype(np.float64)[idx]
     w = weights.astype(np.float64)[idx]  # (n, m)
 
+    # every 2-point hypothesis: its rotation from the segment directions and its
+    # translation from the segment midpoints, written out per coordinate (small batched
+    # matrix products are slow in numpy)
     pairs = np.array(list(combinations(range(m), 2)))  # (P, 2)
-    pa, pb = p[:, pairs[:, 0]], p[:, pairs[:, 1]]  # (n, P, 2)
-    qa, qb = q[:, pairs[:, 0]], q[:, pairs[:, 1]]
-    dp, dq = pb - pa, qb - qa
-    theta = np.arctan2(dp[..., 0] * dq[..., 1] - dp[..., 1] * dq[..., 0],
-                       dp[..., 0] * dq[..., 0] + dp[..., 1] * dq[..., 1])  # (n, P)
-    rot = _rot(theta)  # (n, P, 2, 2)
-    t = 0.5 * (qa + qb) - (rot @ (0.5 * (pa + pb))[..., None])[..., 0]
-    pred = np.einsum("npij,nmj->npmi", rot, p) + t[:, :, None, :]  # (n, P, m, 2)
-    r2 = ((pred - q[:, None]) ** 2).sum(-1)  # (n, P, m)
+    px, py, qx, qy = p[..., 0], p[..., 1], q[..., 0], q[..., 1]  # (n, m) each
+    a, b = pairs[:, 0], pairs[:, 1]
+    dpx, dpy = px[:, b] - px[:, a], py[:, b] - py[:, a]  # (n, P)
+    dqx, dqy = qx[:, b] - qx[:, a], qy[:, b] - qy[:, a]
+    theta = np.arctan2(dpx * dqy - dpy * dqx, dpx * dqx + dpy * dqy)
+    c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]  # (n, P, 1)
+    mpx, mpy = 0.5 * (px[:, a] + px[:, b]), 0.5 * (py[:, a] + py[:, b])
+    tx = 0.5 * (qx[:, a] + qx[:, b]) - (c[..., 0] * mpx - s[..., 0] * mpy)
+    ty = 0.5 * (qy[:, a] + qy[:, b]) - (s[..., 0] * mpx + c[..., 0] * mpy)
+    pxe, pye = px[:, None, :], py[:, None, :]  # (n, 1, m)
+    rx = c * pxe - s * pye + tx[..., None] - qx[:, None, :]  # (n, P, m)
+    ry = s * pxe + c * pye + ty[..., None] - qy[:, None, :]
+    r2 = rx * rx + ry * ry
     tau2 = inlier_threshold**2
     # MSAC cost: inliers pay their squared residual, outliers a constant
     cost = (w[:, None, :] * np.minimum(r2, tau2)).sum(-1) + 1e-9 * np.arange(len(pairs))
