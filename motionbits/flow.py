@@ -8,6 +8,7 @@ MemFlow, ...) plugs in through the same signature.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Protocol
 
 import cv2
@@ -73,9 +74,15 @@ def make_flow(spec: str | FlowBackend) -> FlowBackend:
     )
 
 
-def _sample_grid(flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    h, w = flow.shape[:2]
+@lru_cache(maxsize=4)
+def _pixel_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
     xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    xs.flags.writeable = ys.flags.writeable = False
+    return xs, ys
+
+
+def _sample_grid(flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    xs, ys = _pixel_grid(*flow.shape[:2])
     return xs + flow[..., 0], ys + flow[..., 1]
 
 
@@ -117,4 +124,5 @@ def forward_backward_error(flow_back: np.ndarray, flow_fwd: np.ndarray) -> np.nd
         flow_fwd, map_x, map_y, interpolation=cv2.INTER_LINEAR,
         borderMode=cv2.BORDER_CONSTANT, borderValue=(np.inf, np.inf),
     )
-    return np.linalg.norm(flow_back + fwd_at_q, axis=-1).astype(np.float32)
+    d = flow_back + fwd_at_q
+    return cv2.magnitude(d[..., 0], d[..., 1])

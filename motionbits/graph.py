@@ -13,18 +13,44 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["local_covariances", "twist_edge_weights", "apply_temporal_constraints", "symmetric_graph"]
+__all__ = ["twist_noise_covariance", "local_covariances", "twist_edge_weights", "apply_temporal_constraints", "symmetric_graph"]
 
 
-def local_covariances(twists: np.ndarray, points: np.ndarray, neighbors: np.ndarray,
-                      flow_noise: float) -> np.ndarray:
+def twist_noise_covariance(points: np.ndarray, neighbors: np.ndarray, flow_noise: float
+                           ) -> np.ndarray:
+    """Covariance a twist fitted to each N* = {i} + neighbours has from flow noise alone.
+
+    sigma^2 (J^T J)^-1 with J the Jacobian of the velocities u(p) = omega (-y, x) + v of the
+    m points of N* w.r.t. the twist. It depends on the grid only, so it is computed once.
+
+    Args:
+        points: (n, 2) node positions (x, y) about the image origin.
+        neighbors: (n, k) neighbour indices.
+        flow_noise: flow noise standard deviation in px.
+
+    Returns:
+        (n, 3, 3) float64.
+    """
+    idx = np.concatenate([np.arange(len(points))[:, None], neighbors], axis=1)
+    p = points.astype(np.float64)[idx]
+    x, y = p[..., 0], p[..., 1]
+    jtj = np.empty((len(points), 3, 3))
+    jtj[:, 0, 0] = (x * x + y * y).sum(1)
+    jtj[:, 0, 1] = jtj[:, 1, 0] = -y.sum(1)
+    jtj[:, 0, 2] = jtj[:, 2, 0] = x.sum(1)
+    jtj[:, 1, 1] = jtj[:, 2, 2] = float(idx.shape[1])
+    jtj[:, 1, 2] = jtj[:, 2, 1] = 0.0
+    return flow_noise**2 * np.linalg.inv(jtj)
+
+
+def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.ndarray
+                      ) -> np.ndarray:
     """Regularised covariance of the twists of each node's N* = {i} + neighbours.
 
     Args:
         twists: (n, 3) twists [omega, v_x, v_y].
-        points: (n, 2) node positions (x, y) about the image origin.
         neighbors: (n, k) neighbour indices.
-        flow_noise: flow noise standard deviation in px.
+        noise_cov: (n, 3, 3) regulariser from :func:`twist_noise_covariance`.
 
     Returns:
         (n, 3, 3) float64 symmetric positive-definite covariances.
@@ -32,25 +58,24 @@ def local_covariances(twists: np.ndarray, points: np.ndarray, neighbors: np.ndar
     idx = np.concatenate([np.arange(len(twists))[:, None], neighbors], axis=1)
     v = twists[idx]  # (n, m, 3)
     vc = v - v.mean(axis=1, keepdims=True)
-    sample = np.einsum("nmi,nmj->nij", vc, vc) / (idx.shape[1] - 1)
-    # J^T J for velocities u(p) = omega * (-y, x) + v over the m points of N*
-    p = points.astype(np.float64)[idx]
-    x, y = p[..., 0], p[..., 1]
-    m = float(idx.shape[1])
-    jtj = np.empty((len(twists), 3, 3))
-    jtj[:, 0, 0] = (x * x + y * y).sum(1)
-    jtj[:, 0, 1] = jtj[:, 1, 0] = -y.sum(1)
-    jtj[:, 0, 2] = jtj[:, 2, 0] = x.sum(1)
-    jtj[:, 1, 1] = jtj[:, 2, 2] = m
-    jtj[:, 1, 2] = jtj[:, 2, 1] = 0.0
-    return sample + flow_noise**2 * np.linalg.inv(jtj)
+    out = noise_cov.copy()
+    for i in range(3):
+        for j in range(i, 3):
+            sij = (vc[..., i] * vc[..., j]).sum(1) / (idx.shape[1] - 1)
+            out[:, i, j] += sij
+            if i != j:
+                out[:, j, i] += sij
+    return out
 
 
 def twist_edge_weights(twists: np.ndarray, neighbors: np.ndarray, cov: np.ndarray) -> np.ndarray:
     """(n, k) weights exp(-0.5 * Mdist(i, j)^2) of the edges i -> neighbors[i, s]."""
     diff = twists[neighbors] - twists[:, None, :]  # (n, k, 3)
     prec = np.linalg.inv(cov)  # (n, 3, 3)
-    d2 = np.einsum("nki,nij,nkj->nk", diff, prec, diff)
+    d2 = np.zeros(diff.shape[:2])
+    for i in range(3):
+        for j in range(3):
+            d2 += diff[..., i] * prec[:, None, i, j] * diff[..., j]
     return np.exp(-0.5 * np.maximum(d2, 0.0))
 
 

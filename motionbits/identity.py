@@ -44,6 +44,12 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
                 src, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
             interior_flat = np.flatnonzero(interior.ravel())
             key = key.ravel()[interior_flat[nearest.ravel() - 1]].reshape(labels.shape)
+    # compact renumbering by rank; class 0 stays "background in every map"
+    if key.max() < 4 * key.size:  # a table lookup, without np.unique's sort
+        present = np.zeros(int(key.max()) + 1, np.int64)
+        present[key.ravel()] = 1
+        rank = np.cumsum(present) - (1 if present[0] else 0)
+        return rank[key].astype(np.int32)
     uniq, inv = np.unique(key.ravel(), return_inverse=True)
     inv = inv + (0 if uniq[0] == 0 else 1)
     return inv.reshape(labels.shape).astype(np.int32)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 from motionbits.nodes import NodeGrid
 from motionbits.twists import kabsch_2d
@@ -51,22 +52,44 @@ def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np
     return thetas, trans
 
 
-def _dilated_support(grid: NodeGrid, node_labels: np.ndarray, label: int) -> np.ndarray:
+def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
+                 ) -> tuple[slice, slice, np.ndarray] | None:
+    """Pixels whose grid node has ``label`` in its 3x3 node neighbourhood, as a box
+    (rows, cols) of the image and the (h, w) bool mask inside it; ``None`` if empty.
+
+    Equals dilating the node mask by one node and upsampling it with nearest-neighbour
+    (cv2.INTER_NEAREST's rule: pixel x reads node floor(x * cols / width)), on the box only.
+    """
     m = (node_labels == label).reshape(grid.rows, grid.cols).astype(np.uint8)
-    m = cv2.dilate(m, np.ones((3, 3), np.uint8))
-    return cv2.resize(m, (grid.width, grid.height), interpolation=cv2.INTER_NEAREST) > 0
+    m = cv2.dilate(m, np.ones((3, 3), np.uint8)) > 0
+    rows, cols = np.flatnonzero(m.any(axis=1)), np.flatnonzero(m.any(axis=0))
+    if len(rows) == 0:
+        return None
+    node_y, node_x = grid.pixel_nodes
+    ys = np.flatnonzero((node_y >= rows[0]) & (node_y <= rows[-1]))
+    xs = np.flatnonzero((node_x >= cols[0]) & (node_x <= cols[-1]))
+    box = slice(ys[0], ys[-1] + 1), slice(xs[0], xs[-1] + 1)
+    return box[0], box[1], m[np.ix_(node_y[box[0]], node_x[box[1]])]
 
 
 def _photometric_cost(cur: np.ndarray, prev: np.ndarray, theta: float, t: np.ndarray,
-                      window: int) -> np.ndarray:
-    """(H, W) mean absolute grey-level difference between the current frame and the
-    previous frame pulled back by the backward motion (R(theta), t), over a small window."""
-    c, s = np.cos(theta), np.sin(theta)
-    m = np.array([[c, -s, t[0]], [s, c, t[1]]], np.float32)
+                      window: int, box: tuple[slice, slice]) -> np.ndarray:
+    """Mean absolute grey-level difference between the current frame and the previous
+    frame pulled back by the backward motion (R(theta), t), over a ``window`` square, on
+    the image box ``box``. The box is grown by the window radius (clipped to the image) so
+    the mean is the one over the whole image, cropped."""
     h, w = cur.shape
-    warped = cv2.warpAffine(prev, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+    r = window // 2
+    y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
+    x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
+    c, s = np.cos(theta), np.sin(theta)
+    # the same map as on the whole image, with the output origin moved to (x0, y0)
+    m = np.array([[c, -s, t[0] + c * x0 - s * y0], [s, c, t[1] + s * x0 + c * y0]], np.float32)
+    warped = cv2.warpAffine(prev, m, (x1 - x0, y1 - y0),
+                            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                             borderMode=cv2.BORDER_REPLICATE)
-    return cv2.blur(np.abs(cur - warped), (window, window))
+    cost = cv2.blur(np.abs(cur[y0:y1, x0:x1] - warped), (window, window))
+    return cost[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0]
 
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
@@ -116,8 +139,14 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         best[better] = cost[better]
         out[better] = lab
     for lab, th, t in zip(labels, thetas, trans):
-        ys, xs = np.nonzero(_dilated_support(grid, node_labels, lab))
-        photo = _photometric_cost(cur_gray, prev_gray, th, t, window)[ys, xs]
+        support = _support_box(grid, node_labels, lab)
+        if support is None:
+            continue
+        rows, cols, inside = support
+        photo = _photometric_cost(cur_gray, prev_gray, th, t, window, (rows, cols))[inside]
+        ys, xs = np.nonzero(inside)
+        ys += rows.start
+        xs += cols.start
         c, s = np.cos(th), np.sin(th)
         px = xs.astype(np.float32)
         py = ys.astype(np.float32)
@@ -137,10 +166,10 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
     """Zero every connected piece of a label smaller than ``min_area`` px, except the
     largest piece of each label (a small body is still a body)."""
     out = label_map.copy()
-    for lab in np.unique(label_map):
-        if lab == 0:
+    for i, box in enumerate(ndimage.find_objects(label_map)):
+        if box is None:
             continue
-        mask = (label_map == lab).astype(np.uint8)
+        mask = (label_map[box] == i + 1).astype(np.uint8)
         n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
         if n <= 2:
             continue
@@ -148,5 +177,5 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
         small = np.flatnonzero(areas < min_area) + 1
         small = small[small != np.argmax(areas) + 1]
         if len(small):
-            out[np.isin(comp, small)] = 0
+            out[box][np.isin(comp, small)] = 0
     return out

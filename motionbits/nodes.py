@@ -58,6 +58,14 @@ class NodeGrid:
         r = np.clip(np.floor(xy[:, 1] / ch), 0, self.rows - 1).astype(np.int64)
         return r * self.cols + c
 
+    @property
+    def pixel_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(height,) grid row of each pixel row and (width,) grid column of each pixel
+        column under nearest-node upsampling (:meth:`to_image`)."""
+        ys = np.minimum(np.floor(np.arange(self.height) * (self.rows / self.height)), self.rows - 1)
+        xs = np.minimum(np.floor(np.arange(self.width) * (self.cols / self.width)), self.cols - 1)
+        return ys.astype(np.int64), xs.astype(np.int64)
+
     def to_image(self, node_values: np.ndarray) -> np.ndarray:
         """Nearest-node upsampling of (n,) values to an (height, width) map."""
         grid = node_values.reshape(self.rows, self.cols)

@@ -18,6 +18,7 @@ from motionbits.graph import (
     apply_temporal_constraints,
     local_covariances,
     symmetric_graph,
+    twist_noise_covariance,
     twist_edge_weights,
 )
 from motionbits.identity import match_ids, refine_history
@@ -125,6 +126,7 @@ class MotionBitsSegmenter:
         self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
         self._history: np.ndarray | None = None  # (h, w) int32 meet of all label partitions
         self._past_max: np.ndarray | None = None  # (n, k) largest earlier edge weights
+        self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
         self._first_moved: dict[int, int] = {}
         self._last_moved: dict[int, int] = {}
@@ -148,6 +150,8 @@ class MotionBitsSegmenter:
         self._labels = np.zeros((hw, ww), np.int32)
         self._history = np.zeros((hw, ww), np.int32)
         self._past_max = np.zeros(self._grid.neighbors.shape)
+        self._noise_cov = twist_noise_covariance(self._grid.points, self._grid.neighbors,
+                                                 self.config.flow_noise)
 
     def _to_work(self, frame: np.ndarray) -> np.ndarray:
         hw, ww = self._work_size
@@ -209,7 +213,7 @@ class MotionBitsSegmenter:
             ix = np.clip(np.round(pts).astype(np.int64), 0, [grid.width - 1, grid.height - 1])
             hist_nodes = history[ix[:, 1], ix[:, 0]]
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
-            cov = local_covariances(motions.twist, pts, grid.neighbors, cfg.flow_noise)
+            cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
             raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
             past = self._project_past_max(back_pts)
             weights = apply_temporal_constraints(raw, grid.neighbors, hist_nodes, past)
@@ -301,7 +305,9 @@ class MotionBitsSegmenter:
                 stable_iters=None if cfg.exact else cfg.mcl_stable_iters,
                 prune_total=painted_total, dtype=self._dtype)
             out[painted] = lab + 1
-        if (~painted).any():
+        if not painted.any():  # a component without seeds: connected, so one group
+            out[:] = 1
+        elif not painted.all():
             rest = members[~painted]
             sub = w[rest][:, rest]
             _, comp = connected_components(sub, directed=False)

@@ -3,7 +3,12 @@
 import numpy as np
 import pytest
 
-from motionbits.graph import apply_temporal_constraints, local_covariances, twist_edge_weights
+from motionbits.graph import (
+    apply_temporal_constraints,
+    local_covariances,
+    twist_edge_weights,
+    twist_noise_covariance,
+)
 from motionbits.identity import match_ids, refine_history
 from motionbits.mcl import markov_cluster, normalized_similarity
 from motionbits.nodes import NodeGrid, sample_bilinear
@@ -59,7 +64,8 @@ def test_mahalanobis_weights_separate_two_motions():
     left = grid.points[:, 0] < 50
     twist[left] = [0.0, 2.0, 0.0]  # left half translates, right half is static
     twist += np.random.default_rng(0).normal(scale=0.01, size=twist.shape)
-    cov = local_covariances(twist, grid.points, grid.neighbors, 0.1)
+    cov = local_covariances(twist, grid.neighbors,
+                            twist_noise_covariance(grid.points, grid.neighbors, 0.1))
     w = twist_edge_weights(twist, grid.neighbors, cov)
     same = left[:, None] == left[grid.neighbors]
     interior = np.array([all(left[j] == left[i] for j in grid.neighbors[i]) for i in range(grid.n)])
@@ -144,3 +150,11 @@ def test_symmetric_graph_induced_subgraph():
     w = symmetric_graph(np.array([[0.5], [0.7], [0.2]]), neighbors, keep=np.array([False, True, True]))
     assert w.shape == (2, 2)
     assert w[0, 1] == w[1, 0] == pytest.approx(0.7)
+
+
+@pytest.mark.parametrize("size,side", [((480, 640), 100), ((37, 91), 13), ((720, 1280), 50), ((10, 10), 7)])
+def test_pixel_nodes_match_nearest_upsampling(size, side):
+    grid = NodeGrid.build(size[0], size[1], side, 5)
+    ys, xs = grid.pixel_nodes
+    expected = ys[:, None] * grid.cols + xs[None, :]
+    np.testing.assert_array_equal(grid.to_image(np.arange(grid.n, dtype=np.int32)), expected)
