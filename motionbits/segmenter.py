@@ -197,22 +197,26 @@ class MotionBitsSegmenter:
             flow_fwd = self.flow(self._prev, cur)
             flow_back = self.flow(cur, self._prev)
             fb_err = forward_backward_error(flow_back, flow_fwd)
-
-        with self._stage("twists"):
-            pts = grid.points
-            back_pts = pts + sample_bilinear(flow_back, pts)
-            node_err = sample_bilinear(np.minimum(fb_err, 1e3)[..., None], pts)[:, 0]
-            reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
-            motions = fit_local_motions(pts, back_pts, grid.neighbors, reliability,
-                                        cfg.ransac_threshold)
-
-        with self._stage("graph"):
+            # last frame's labels and label history, carried to this frame
             prior_valid = fb_err < cfg.fb_sigma
             prior = warp_nearest(self._labels, flow_back)
             history = warp_nearest(self._history, flow_back)
+
+        with self._stage("twists"):
+            pts = grid.points
             ix = np.clip(np.round(pts).astype(np.int64), 0, [grid.width - 1, grid.height - 1])
             hist_nodes = history[ix[:, 1], ix[:, 0]]
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
+            node_flow = sample_bilinear(flow_back, pts)
+            back_pts = pts + node_flow
+            node_err = sample_bilinear(np.minimum(fb_err, 1e3)[..., None], pts)[:, 0]
+            reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
+            motions = fit_local_motions(
+                pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
+                dtype=self._dtype, nodes=None if cfg.exact else self._nodes_to_fit(
+                    node_flow, prior_nodes))
+
+        with self._stage("graph"):
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
             raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
             past = self._project_past_max(back_pts)
@@ -271,6 +275,22 @@ class MotionBitsSegmenter:
             result = self._result(labels, node_ids, ids, thetas, trans, pts)
         result.timings = dict(self._timings)
         return result
+
+    def _nodes_to_fit(self, node_flow: np.ndarray, prior_nodes: np.ndarray) -> np.ndarray:
+        """Fast path: the nodes whose local twist can matter this frame.
+
+        A node enters the moving set if its fitted displacement exceeds the threshold, if
+        it was in a MotionBit, or if it lies in a hole of that set; the graph then reads
+        the twists of its neighbourhood. So: nodes whose own flow exceeds half the
+        threshold or that were in a MotionBit, grown by two rings of the grid (their
+        neighbourhoods, and the neighbourhoods of those), with holes filled. Elsewhere
+        nothing moves and a rigid fit only returns the flow's own translation.
+        """
+        g, cfg = self._grid, self.config
+        seed = (np.hypot(node_flow[:, 0], node_flow[:, 1]) > 0.5 * cfg.move_threshold) | (
+            prior_nodes != 0)
+        grown = ndimage.binary_dilation(seed.reshape(g.rows, g.cols), np.ones((5, 5), bool))
+        return np.flatnonzero(ndimage.binary_fill_holes(grown))
 
     def _project_past_max(self, back_pts: np.ndarray) -> np.ndarray:
         """Largest earlier weight of each current edge, read from the graph of the previous

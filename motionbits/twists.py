@@ -96,6 +96,8 @@ def fit_local_motions(
     neighbors: np.ndarray,
     weights: np.ndarray,
     inlier_threshold: float,
+    dtype: type = np.float64,
+    nodes: np.ndarray | None = None,
 ) -> LocalMotions:
     """RANSAC (all 2-point subsets) + weighted Kabsch for every node's neighbourhood.
 
@@ -106,16 +108,41 @@ def fit_local_motions(
         weights: (n,) reliability of each node's flow in [0, 1] (forward-backward
             consistency); the Kabsch refit and the RANSAC score are weighted by it.
         inlier_threshold: residual (px) under which a point is an inlier.
+        dtype: float type of the hypothesis scoring (float32 halves its memory traffic);
+            the final weighted Kabsch fits are always float64.
+        nodes: optional indices of the nodes to fit; every other node gets the pure
+            translation of its own flow (angle 0, all points inliers), which is what a
+            neighbourhood that does not move yields up to noise.
 
     Returns:
-        :class:`LocalMotions`.
+        :class:`LocalMotions` for all n nodes.
     """
     n = points.shape[0]
-    idx = np.concatenate([np.arange(n)[:, None], neighbors], axis=1)  # (n, m)
-    m = idx.shape[1]
-    p = points.astype(np.float64)[idx]  # (n, m, 2)
-    q = back_points.astype(np.float64)[idx]
-    w = weights.astype(np.float64)[idx]  # (n, m)
+    fit = np.arange(n) if nodes is None else np.asarray(nodes, np.int64)
+    idx = np.concatenate([fit[:, None], neighbors[fit]], axis=1)  # (n', m)
+    angle, trans, inliers = _fit_neighbourhoods(points, back_points, idx, weights,
+                                                inlier_threshold, dtype)
+    if nodes is not None:
+        angle_all = np.zeros(n)
+        trans_all = (back_points - points).astype(np.float64)
+        inliers_all = np.ones((n, idx.shape[1]), bool)
+        angle_all[fit], trans_all[fit], inliers_all[fit] = angle, trans, inliers
+        angle, trans, inliers = angle_all, trans_all, inliers_all
+    own = points.astype(np.float64)
+    moved_to = (_rot(angle) @ own[..., None])[..., 0] + trans
+    displacement = np.linalg.norm(moved_to - own, axis=1)
+    twist = -se2_log(angle, trans)  # log(T^-1) = -log(T): forward motion
+    return LocalMotions(twist=twist, angle=angle, trans=trans, displacement=displacement,
+                        inliers=inliers)
+
+
+def _fit_neighbourhoods(points, back_points, idx, weights, inlier_threshold, dtype):
+    """Backward rigid motion (angle (n',), trans (n', 2)) and inliers (n', m) of each row
+    of point indices ``idx`` (n', m)."""
+    n, m = idx.shape
+    p = points.astype(dtype)[idx]  # (n, m, 2)
+    q = back_points.astype(dtype)[idx]
+    w = weights.astype(dtype)[idx]  # (n, m)
 
     # every 2-point hypothesis: its rotation from the segment directions and its
     # translation from the segment midpoints, written out per coordinate (small batched
@@ -139,15 +166,11 @@ def fit_local_motions(
     cost = (w[:, None, :] * np.minimum(r2, tau2)).sum(-1) + 1e-9 * np.arange(len(pairs))
     best = np.argmin(cost, axis=1)
     inliers = r2[np.arange(n), best] < tau2  # (n, m)
-    fit_w = w * inliers
+    fit_w = weights.astype(np.float64)[idx] * inliers
     # a neighbourhood without any weighted inlier falls back to all points, unweighted
     none = fit_w.sum(1) <= 0
     fit_w[none] = 1.0
-    ang, trans = kabsch_2d(p, q, fit_w)
+    ang, trans = kabsch_2d(points.astype(np.float64)[idx], back_points.astype(np.float64)[idx],
+                           fit_w)
 
-    own = points.astype(np.float64)
-    moved_to = (_rot(ang) @ own[..., None])[..., 0] + trans
-    displacement = np.linalg.norm(moved_to - own, axis=1)
-    twist = -se2_log(ang, trans)  # log(T^-1) = -log(T): forward motion
-    return LocalMotions(twist=twist, angle=ang, trans=trans, displacement=displacement,
-                        inliers=inliers)
+    return ang, trans, inliers
