@@ -212,3 +212,19 @@ def test_boundary_hits_match_euclidean_distance_transform(seed):
     dist_to_p = ndimage.distance_transform_edt(~bp)
     np.testing.assert_allclose(s.bprecision[0], np.mean(dist_to_g[bp] <= 2))
     np.testing.assert_allclose(s.brecall[0], np.mean(dist_to_p[bg] <= 2))
+
+
+def test_adjusted_rand_index_hand_computed():
+    from motionbits.eval import adjusted_rand_index as ari
+
+    a = np.array([0, 0, 0, 1, 1, 1])
+    assert ari(a, a) == 1.0
+    assert ari(a, 7 - a) == 1.0  # renumbering does not matter
+    # one item moved: pairs 15; n_ij = [[2, 1], [0, 3]] -> index 1 + 3 = 4; a-sums 3 + 3 = 6;
+    # b-sums C(2,2) + C(4,2) = 1 + 6 = 7; E = 6 * 7 / 15 = 2.8; top = 6.5 -> (4 - 2.8) / 3.7
+    b = np.array([0, 0, 1, 1, 1, 1])
+    assert ari(a, b) == pytest.approx(1.2 / 3.7)
+    assert ari(np.zeros(5), np.zeros(5)) == 1.0
+    assert ari(np.zeros(4), np.arange(4)) == 0.0
+    with pytest.raises(ValueError, match="differ in size"):
+        ari(a, b[:4])

@@ -5,8 +5,10 @@ Public names:
     summarize(frames) -> {"macro": ..., "pooled": ...}      aggregate over a dataset
     read_label_map / write_label_map                        16-bit PNG label maps
     evaluate_dataset(pred_dir, gt_dir)                      MoRiBo folders (see dataset.py)
+    adjusted_rand_index(a, b)                               agreement of two partitions
 """
 
+from motionbits.eval.agreement import adjusted_rand_index
 from motionbits.eval.boundary import boundary_map, boundary_tolerance
 from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
@@ -14,6 +16,7 @@ from motionbits.eval.metrics import METRIC_KEYS, FrameScores, evaluate_frame, su
 from motionbits.eval.overlap import contingency, overlap_scores
 
 __all__ = [
+    "adjusted_rand_index",
     "METRIC_KEYS",
     "FrameScores",
     "evaluate_frame",
