@@ -252,7 +252,8 @@ class MotionBitsSegmenter:
             painted_total = int(painted.sum())
             node_cluster = np.zeros(grid.n, np.int64)
             members_of = np.split(np.argsort(comp, kind="stable"),
-                                  np.cumsum(np.bincount(comp, minlength=n_comp))[:-1])
+                                  np.cumsum(np.bincount(comp, minlength=n_comp))[:-1]
+                                  ) if n_comp else []
             for c, members in enumerate(members_of):
                 cluster = self._cluster(b[members, :n_seeds[c]], w, members, painted_total)
                 node_cluster[active_idx[members]] = cluster + node_cluster.max()

@@ -23,6 +23,14 @@ def test_one_frame_is_all_background(tiny):
     assert len(res) == 1 and not res[0].labels.any()
 
 
+@pytest.mark.parametrize("exact", [False, True])
+def test_still_video_is_all_background(tiny, exact):
+    """Nothing moves: no node is active, and every stage copes with an empty graph."""
+    frames = [tiny.frames[0]] * 4
+    res = list(segment_video(frames, SMALL.with_(exact=exact)))
+    assert all(not r.labels.any() and r.motionbits == [] for r in res)
+
+
 def test_missing_file():
     with pytest.raises(FileNotFoundError, match="not found"):
         list(segment_video("/nonexistent/video.mp4"))

@@ -51,14 +51,7 @@ def run_benchmark(
     """
     if not methods:
         raise ValueError("no method to run")
-    scenes = discover_scenes(data)
-    if max_scenes is not None:
-        keep, seen = [], {}
-        for s in scenes:
-            seen[s.track] = seen.get(s.track, 0) + 1
-            if seen[s.track] <= max_scenes:
-                keep.append(s)
-        scenes = keep
+    scenes = discover_scenes(data, max_scenes)
     by_track: dict[str, dict[str, list[FrameScores]]] = {m: {} for m in methods}
     per_scene: dict[str, dict] = {m: {} for m in methods}
     seconds = {m: 0.0 for m in methods}

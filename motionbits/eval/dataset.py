@@ -53,8 +53,12 @@ def is_scene(path: Path) -> bool:
     return path.is_dir() and ((path / "gt.png").is_file() or (path / "frames").is_dir())
 
 
-def discover_scenes(root: str | os.PathLike) -> list[Scene]:
+def discover_scenes(root: str | os.PathLike, max_per_track: int | None = None) -> list[Scene]:
     """List the scenes under a scene folder, a track folder or a folder of tracks.
+
+    Args:
+        root: the folder.
+        max_per_track: keep only the first scenes (by name) of each track.
 
     Returns:
         Scenes sorted by (track, name). A single scene gets its parent's name as track; a
@@ -64,7 +68,19 @@ def discover_scenes(root: str | os.PathLike) -> list[Scene]:
         FileNotFoundError: ``root`` does not exist.
         ValueError: no scene found.
     """
-    root = Path(root)
+    scenes = _find_scenes(Path(root))
+    if max_per_track is None:
+        return scenes
+    count: dict[str, int] = {}
+    keep = []
+    for scene in scenes:
+        count[scene.track] = count.get(scene.track, 0) + 1
+        if count[scene.track] <= max_per_track:
+            keep.append(scene)
+    return keep
+
+
+def _find_scenes(root: Path) -> list[Scene]:
     if not root.is_dir():
         raise FileNotFoundError(f"dataset folder not found: {root}")
     if is_scene(root):
