@@ -23,7 +23,7 @@ from motionbits.graph import (
 )
 from motionbits.identity import match_ids, refine_history
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
-from motionbits.mcl import markov_cluster, normalized_similarity
+from motionbits.mcl import markov_cluster, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_labels
 from motionbits.twists import fit_local_motions, se2_log
@@ -320,8 +320,9 @@ class MotionBitsSegmenter:
         painted = b.sum(axis=1) > 0
         cfg = self.config
         if painted.any():
+            bh = normalize_rows(b[painted])
             lab, _ = markov_cluster(
-                normalized_similarity(b[painted]), expansion=cfg.mcl_expansion,
+                bh @ bh.T, factor=bh, expansion=cfg.mcl_expansion,
                 inflation=cfg.mcl_inflation, prune=cfg.mcl_prune, max_iters=cfg.mcl_max_iters,
                 stable_iters=None if cfg.exact else cfg.mcl_stable_iters,
                 prune_total=painted_total, dtype=self._dtype)

@@ -10,7 +10,7 @@ from motionbits.graph import (
     twist_noise_covariance,
 )
 from motionbits.identity import match_ids, refine_history
-from motionbits.mcl import markov_cluster, normalized_similarity
+from motionbits.mcl import markov_cluster, normalize_rows, normalized_similarity
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_labels
 from motionbits.graph import symmetric_graph
@@ -158,3 +158,26 @@ def test_pixel_nodes_match_nearest_upsampling(size, side):
     ys, xs = grid.pixel_nodes
     expected = ys[:, None] * grid.cols + xs[None, :]
     np.testing.assert_array_equal(grid.to_image(np.arange(grid.n, dtype=np.int32)), expected)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("stable_iters", [2, None])
+def test_mcl_fast_variants_match_the_dense_reference(dtype, stable_iters):
+    """The low-rank first expansion, float32 and multiplicities give the labels of the
+    plain dense computation on an embedding with overlapping, noisy clusters."""
+    rng = np.random.default_rng(1)
+    centers = np.kron(np.eye(4), np.ones((1, 3)))
+    emb = centers[rng.integers(0, 4, 120)] * rng.uniform(0.2, 1, (120, 12))
+    emb += rng.uniform(0, 0.05, emb.shape)
+    bh = normalize_rows(emb)
+    x = bh @ bh.T
+    ref, _ = markov_cluster(x, stable_iters=stable_iters)
+    fast, _ = markov_cluster(x, stable_iters=stable_iters, dtype=dtype, factor=bh)
+    assert len(np.unique(ref)) >= 2
+    np.testing.assert_array_equal(fast, ref)
+    reps = rng.integers(1, 4, 120)
+    lab_dup, _ = markov_cluster(normalized_similarity(np.repeat(emb, reps, axis=0)),
+                                stable_iters=stable_iters)
+    lab_mult, _ = markov_cluster(x, multiplicity=reps, factor=bh, dtype=dtype,
+                                 stable_iters=stable_iters)
+    np.testing.assert_array_equal(np.repeat(lab_mult, reps), lab_dup)
