@@ -13,7 +13,27 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["twist_noise_covariance", "local_covariances", "twist_edge_weights", "apply_temporal_constraints", "symmetric_graph"]
+__all__ = ["inv_sym3", "twist_noise_covariance", "local_covariances", "twist_edge_weights", "apply_temporal_constraints", "symmetric_graph"]
+
+
+def inv_sym3(a: np.ndarray) -> np.ndarray:
+    """Inverses of a batch of symmetric 3x3 matrices, (n, 3, 3) -> (n, 3, 3), by cofactors
+    (one vectorised pass; LAPACK per 3x3 matrix costs more in call overhead than in work)."""
+    a00, a01, a02 = a[:, 0, 0], a[:, 0, 1], a[:, 0, 2]
+    a11, a12, a22 = a[:, 1, 1], a[:, 1, 2], a[:, 2, 2]
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    out = np.empty_like(a)
+    out[:, 0, 0], out[:, 1, 1], out[:, 2, 2] = c00, c11, c22
+    out[:, 0, 1] = out[:, 1, 0] = c01
+    out[:, 0, 2] = out[:, 2, 0] = c02
+    out[:, 1, 2] = out[:, 2, 1] = c12
+    return out / det[:, None, None]
 
 
 def twist_noise_covariance(points: np.ndarray, neighbors: np.ndarray, flow_noise: float
@@ -40,7 +60,7 @@ def twist_noise_covariance(points: np.ndarray, neighbors: np.ndarray, flow_noise
     jtj[:, 0, 2] = jtj[:, 2, 0] = x.sum(1)
     jtj[:, 1, 1] = jtj[:, 2, 2] = float(idx.shape[1])
     jtj[:, 1, 2] = jtj[:, 2, 1] = 0.0
-    return flow_noise**2 * np.linalg.inv(jtj)
+    return flow_noise**2 * inv_sym3(jtj)
 
 
 def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.ndarray
@@ -71,7 +91,7 @@ def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.n
 def twist_edge_weights(twists: np.ndarray, neighbors: np.ndarray, cov: np.ndarray) -> np.ndarray:
     """(n, k) weights exp(-0.5 * Mdist(i, j)^2) of the edges i -> neighbors[i, s]."""
     diff = twists[neighbors] - twists[:, None, :]  # (n, k, 3)
-    prec = np.linalg.inv(cov)  # (n, 3, 3)
+    prec = inv_sym3(cov)  # (n, 3, 3)
     d2 = np.zeros(diff.shape[:2])
     for i in range(3):
         for j in range(3):

@@ -127,7 +127,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     h, w = flow_back.shape[:2]
     window = 3
     credit = np.where(prior_valid, bonus, 0.0).astype(np.float32)
-    static_cost = np.linalg.norm(flow_back, axis=-1) + photo_weight * cv2.blur(
+    static_cost = cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + photo_weight * cv2.blur(
         np.abs(cur_gray - prev_gray), (window, window))
     best = static_cost - credit * (prior == 0)
     out = np.zeros((h, w), np.int32)

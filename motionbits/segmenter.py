@@ -381,9 +381,10 @@ class MotionBitsSegmenter:
         if (h, w) != labels.shape:
             out = cv2.resize(labels, (w, h), interpolation=cv2.INTER_NEAREST)
         records = []
-        present = np.unique(out[out > 0])
-        for lab in present:
-            lab = int(lab)
+        for index, box in enumerate(ndimage.find_objects(out)):
+            if box is None:
+                continue
+            lab = index + 1
             tw = twists.get(lab, np.zeros(3))
             sel = node_ids == lab
             moving = False
@@ -396,10 +397,11 @@ class MotionBitsSegmenter:
             if moving:
                 self._first_moved.setdefault(lab, self.frame_index)
                 self._last_moved[lab] = self.frame_index
-            ys, xs = np.nonzero(out == lab)
+            ys, xs = np.nonzero(out[box] == lab)
+            ys, xs = ys + box[0].start, xs + box[1].start
             records.append(MotionBit(
                 id=lab, area=int(len(xs)),
-                bbox=(int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1),
+                bbox=(box[1].start, box[0].start, box[1].stop, box[0].stop),
                 centroid=(float(xs.mean()), float(ys.mean())),
                 twist=(float(tw[0]), float(tw[1] * scale[0]), float(tw[2] * scale[1])),
                 moving=moving,

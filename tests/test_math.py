@@ -5,6 +5,7 @@ import pytest
 
 from motionbits.graph import (
     apply_temporal_constraints,
+    inv_sym3,
     local_covariances,
     twist_edge_weights,
     twist_noise_covariance,
@@ -181,3 +182,10 @@ def test_mcl_fast_variants_match_the_dense_reference(dtype, stable_iters):
     lab_mult, _ = markov_cluster(x, multiplicity=reps, factor=bh, dtype=dtype,
                                  stable_iters=stable_iters)
     np.testing.assert_array_equal(np.repeat(lab_mult, reps), lab_dup)
+
+
+def test_inv_sym3_matches_numpy():
+    rng = np.random.default_rng(2)
+    a = rng.normal(size=(50, 3, 3))
+    spd = a @ a.transpose(0, 2, 1) + 0.1 * np.eye(3)
+    np.testing.assert_allclose(inv_sym3(spd), np.linalg.inv(spd), rtol=1e-8, atol=1e-10)
