@@ -1,0 +1,35 @@
+"""The fast path (default) against the exact reference computation (``exact=True``)."""
+
+import numpy as np
+import pytest
+
+from motionbits import MotionBitsConfig, segment_video
+from motionbits.eval import adjusted_rand_index
+from motionbits.synth import demo_clip
+
+
+@pytest.fixture(scope="module")
+def both_paths():
+    size = (240, 320)
+    clip = demo_clip(n_frames=8, size=size)
+    config = MotionBitsConfig(n_nodes=2500, max_side=max(size))
+    fast = list(segment_video(clip.frames, config))
+    exact = list(segment_video(clip.frames, config.with_(exact=True)))
+    return fast, exact
+
+
+def test_fast_path_agrees_with_exact_at_grid_and_pixel_level(both_paths):
+    fast, exact = both_paths
+    for f, e in zip(fast[1:], exact[1:]):
+        assert f.node_labels.any(), "the clip must have moving bodies for this to test anything"
+        assert adjusted_rand_index(f.node_labels, e.node_labels) >= 0.99
+        assert adjusted_rand_index(f.labels, e.labels) >= 0.99
+
+
+def test_exact_path_is_deterministic():
+    clip = demo_clip(n_frames=4, size=(120, 160))
+    config = MotionBitsConfig(n_nodes=900, max_side=160, exact=True)
+    a = [r.labels for r in segment_video(clip.frames, config)]
+    b = [r.labels for r in segment_video(clip.frames, config)]
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
