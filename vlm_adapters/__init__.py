@@ -12,6 +12,9 @@ Adapters (all with ``generate(frames, prompt, system=None, ...) -> str`` and
 
 Reverse path: `phrases_from_answer`, `YOLOEGrounder` / `TextGrounder`, `masks_to_label_map`,
 and `make_vlm_yoloe_method` (a benchmark method ``frames -> (H, W) int32``).
+`vlm_yoloe_method` builds that method from string options (a VLM spec such as
+``qwen2.5-vl:/models/...``, YOLOE files); it is the ``vlm-yoloe`` method of
+``motionbits benchmark``, registered as an entry point in ``motionbits.methods``.
 
 Names are imported lazily: ``import vlm_adapters`` does not import torch, transformers
 or ultralytics.
@@ -57,6 +60,9 @@ _EXPORTS: dict[str, str] = {
     # benchmark method
     "VLMYOLOEMethod": "method",
     "make_vlm_yoloe_method": "method",
+    # the `vlm-yoloe` method of `motionbits benchmark` (entry point), built from string options
+    "load_vlm": "plugin",
+    "vlm_yoloe_method": "plugin",
 }
 
 __all__ = sorted(_EXPORTS)
@@ -90,6 +96,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only (names a
     from .internvl import InternVideo25Adapter, InternVLAdapter
     from .method import VLMYOLOEMethod, make_vlm_yoloe_method
     from .openai_compat import OpenAICompatibleVLM
+    from .plugin import load_vlm, vlm_yoloe_method
     from .phrases import (
         MOVED_OBJECTS_PROMPT,
         OUTPUT_FORMAT,

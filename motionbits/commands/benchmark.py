@@ -6,7 +6,46 @@ import argparse
 import json
 from pathlib import Path
 
-__all__ = ["register", "run"]
+__all__ = ["register", "run", "parse_method_options"]
+
+_OPTION_HELP = ("keyword option for the factory of a method in --methods (repeatable); the value "
+                "is a string, the method converts it; see the example below")
+
+_EPILOG = """\
+example: the VLM -> YOLOE baseline (a plug-in from vlm_adapters; options in docs/vlm_adapters.md)
+  motionbits benchmark --data DIR --methods motionbits vlm-yoloe \\
+    --option vlm-yoloe.vlm=qwen2.5-vl:/models/Qwen2.5-VL-7B-Instruct \\
+    --option vlm-yoloe.yoloe=/models/yoloe-11l-seg.pt \\
+    --option vlm-yoloe.text_encoder=/models/mobileclip_blt.ts
+"""
+
+
+def parse_method_options(items: list[str] | None, methods: list[str],
+                         known: list[str] | None = None) -> dict[str, dict[str, str]]:
+    """``["vlm-yoloe.vlm=stub:x", ...]`` -> ``{"vlm-yoloe": {"vlm": "stub:x"}, ...}``.
+
+    The method name is what comes before the last ``.`` left of the first ``=``; the value
+    is everything after that ``=`` (it may contain ``=``, ``.`` and ``:``).
+
+    Raises:
+        ValueError: malformed item, a key given twice, an unknown method (not in ``known``,
+            when given) or a method not in ``methods``.
+    """
+    out: dict[str, dict[str, str]] = {}
+    for item in items or []:
+        target, eq, value = item.partition("=")
+        method, dot, key = target.rpartition(".")
+        if not eq or not dot or not method or not key.isidentifier():
+            raise ValueError(f"--option {item!r}: expected METHOD.KEY=VALUE, e.g. vlm-yoloe.yoloe=/models/yoloe-11l-seg.pt")
+        if known is not None and method not in known:
+            raise ValueError(f"--option {item!r}: unknown method {method!r}; available: {', '.join(known)}")
+        if method not in methods:
+            raise ValueError(f"--option {item!r}: method {method!r} is not in --methods ({' '.join(methods)})")
+        opts = out.setdefault(method, {})
+        if key in opts:
+            raise ValueError(f"--option {item!r}: {method}.{key} is given twice")
+        opts[key] = value
+    return out
 
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -14,16 +53,19 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "benchmark",
         help="run segmentation methods on MoRiBo-format data and score them",
         description=(
-            "Run each method on every scene (frames -> last-frame label map), score it with the "
-            "MoRiBo protocol (see 'motionbits eval') and print Overlap / Boundary P R F1 (mIoU) "
+            "Run each method on every scene (frames -> last-frame label map), score it with the\n"
+            "MoRiBo protocol (see 'motionbits eval') and print Overlap / Boundary P R F1 (mIoU)\n"
             "per track and averaged over tracks, with seconds per frame."
         ),
+        epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--data", required=True, metavar="DIR",
-                   help="MoRiBo scene, track (folder of scenes) or folder of tracks")
+    p.add_argument("--data", metavar="DIR",
+                   help="MoRiBo scene, track (folder of scenes) or folder of tracks (required unless --list)")
     p.add_argument("--methods", nargs="+", default=["flow-cc", "affine-ransac", "motionbits"],
                    metavar="NAME", help="registered methods (default: flow-cc affine-ransac "
                                         "motionbits; --list shows all)")
+    p.add_argument("--option", action="append", default=[], metavar="METHOD.KEY=VALUE", help=_OPTION_HELP)
     p.add_argument("--list", action="store_true", help="list the registered methods and exit")
     p.add_argument("--json", metavar="FILE", help="write all scores and timings here")
     p.add_argument("--save-pred", metavar="DIR", help="write predictions as DIR/<method>/<track>/<scene>.png")
@@ -43,11 +85,20 @@ def run(args: argparse.Namespace) -> int:
         for name, desc in available_methods().items():
             print(f"{name:<16} {desc}")
         return 0
+    if not args.data:
+        raise ValueError("--data DIR is required (unless --list)")
     known = available_methods()
     unknown = [m for m in args.methods if m not in known]
     if unknown:
         raise ValueError(f"unknown method(s) {', '.join(unknown)}; available: {', '.join(known)}")
-    methods = {name: make_method(name) for name in dict.fromkeys(args.methods)}
+    names = list(dict.fromkeys(args.methods))
+    options = parse_method_options(args.option, names, list(known))
+    methods = {}
+    for name in names:
+        try:
+            methods[name] = make_method(name, **options.get(name, {}))
+        except ImportError as exc:  # e.g. a plug-in's optional dependency; the message names the extra
+            raise ValueError(f"method {name!r} cannot be built: {exc}") from exc
     results, spf = run_benchmark(args.data, methods, save_pred=args.save_pred,
                                  max_scenes=args.max_scenes, progress=not args.quiet)
     print(format_table(results, block="macro", seconds_per_frame=spf), end="")
