@@ -1,8 +1,8 @@
 """Benchmark methods: a registry of plug-ins ``frames -> last-frame label map``.
 
 Built in (no model weights): ``flow-cc`` (flow threshold + connected components),
-``affine-ransac`` (sequential-RANSAC affine motion clusters) and ``motionbits`` (the
-segmenter, imported when first used). Add more with :func:`register_method` or an entry
+``affine-ransac`` (sequential-RANSAC affine motion clusters), ``motionbits`` (the
+segmenter, imported when first used) and ``motionbits-exact`` (its exact reference path). Add more with :func:`register_method` or an entry
 point in the group ``motionbits.methods``.
 """
 
@@ -29,5 +29,7 @@ def _motionbits(**kw):
 register_method("flow-cc", _flow_cc, "DIS flow magnitude > 1 px at any time + connected components")
 register_method("affine-ransac", _affine, "sequential-RANSAC affine motion clusters on chained DIS flow")
 register_method("motionbits", _motionbits, "MotionBits (motionbits.segment_video), paper defaults")
+register_method("motionbits-exact", lambda **kw: _motionbits(**{"exact": True, **kw}),
+                "MotionBits, exact reference path (float64, MCL until idempotent)")
 
 __all__ = ["Method", "MethodInfo", "available_methods", "make_method", "register_method"]
