@@ -38,6 +38,9 @@ class MotionBitsConfig:
     # 2-3 iterations while the iterate takes 45-60 more to become idempotent
     mcl_stable_iters: int = 2
     mcl_prune: float = 0.6  # ours: prune entries < mcl_prune / m (m = nodes clustered)
+    # ours (fast path): dense MCL costs m^3 on a block of m nodes; a larger block is
+    # clustered through at most this many representatives (groups of neighbouring nodes)
+    mcl_max_items: int = 400
     # ours: True is the reference computation (float64, MCL iterated until idempotent);
     # False (default) is the fast path: float32, MCL stops once its labels are stable
     exact: bool = False
@@ -68,6 +71,7 @@ class MotionBitsConfig:
             "mcl_max_iters": self.mcl_max_iters >= 1,
             "mcl_stable_iters": self.mcl_stable_iters >= 1,
             "mcl_prune": self.mcl_prune >= 0.0,
+            "mcl_max_items": self.mcl_max_items >= 16,
             "ransac_threshold": self.ransac_threshold > 0,
             "fb_sigma": self.fb_sigma > 0,
             "flow_noise": self.flow_noise > 0,

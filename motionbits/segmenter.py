@@ -23,7 +23,7 @@ from motionbits.graph import (
 )
 from motionbits.identity import match_ids, refine_history
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
-from motionbits.mcl import markov_cluster, normalize_rows
+from motionbits.mcl import markov_cluster_coarse, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_labels
 from motionbits.twists import fit_local_motions, se2_log
@@ -255,7 +255,8 @@ class MotionBitsSegmenter:
                                   np.cumsum(np.bincount(comp, minlength=n_comp))[:-1]
                                   ) if n_comp else []
             for c, members in enumerate(members_of):
-                cluster = self._cluster(b[members, :n_seeds[c]], w, members, painted_total)
+                cluster = self._cluster(b[members, :n_seeds[c]], w, members,
+                                        active_idx[members], painted_total)
                 node_cluster[active_idx[members]] = cluster + node_cluster.max()
 
         with self._stage("masks"):
@@ -308,11 +309,13 @@ class MotionBitsSegmenter:
     def _dtype(self) -> type:
         return np.float64 if self.config.exact else np.float32
 
-    def _cluster(self, b: np.ndarray, w, members: np.ndarray, painted_total: int) -> np.ndarray:
-        """Cluster indices 1..K of the nodes ``members`` of one component of the graph ``w``:
-        MCL on their rows of B that received paint (pruning relative to ``painted_total``,
-        the painted nodes of the whole frame); nodes that no seed reached are grouped by
-        graph connectivity."""
+    def _cluster(self, b: np.ndarray, w, members: np.ndarray, nodes: np.ndarray,
+                 painted_total: int) -> np.ndarray:
+        """Cluster indices 1..K of the nodes ``members`` (rows of ``w``; grid nodes ``nodes``)
+        of one component of the graph ``w``: MCL on their rows of B that received paint
+        (pruning relative to ``painted_total``, the painted nodes of the whole frame; on
+        representatives if the fast path's ``mcl_max_items`` is exceeded); nodes that no
+        seed reached are grouped by graph connectivity."""
         m = b.shape[0]
         out = np.zeros(m, np.int64)
         if m == 0:
@@ -321,8 +324,10 @@ class MotionBitsSegmenter:
         cfg = self.config
         if painted.any():
             bh = normalize_rows(b[painted])
-            lab, _ = markov_cluster(
-                bh @ bh.T, factor=bh, expansion=cfg.mcl_expansion,
+            node = nodes[painted]
+            lab, _ = markov_cluster_coarse(
+                bh, np.stack([node // self._grid.cols, node % self._grid.cols], axis=1),
+                len(bh) if cfg.exact else cfg.mcl_max_items, expansion=cfg.mcl_expansion,
                 inflation=cfg.mcl_inflation, prune=cfg.mcl_prune, max_iters=cfg.mcl_max_iters,
                 stable_iters=None if cfg.exact else cfg.mcl_stable_iters,
                 prune_total=painted_total, dtype=self._dtype)

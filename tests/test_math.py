@@ -11,7 +11,8 @@ from motionbits.graph import (
     twist_noise_covariance,
 )
 from motionbits.identity import match_ids, refine_history
-from motionbits.mcl import markov_cluster, normalize_rows, normalized_similarity
+from motionbits.eval import adjusted_rand_index
+from motionbits.mcl import markov_cluster, markov_cluster_coarse, normalize_rows, normalized_similarity
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_labels
 from motionbits.graph import symmetric_graph
@@ -189,3 +190,23 @@ def test_inv_sym3_matches_numpy():
     a = rng.normal(size=(50, 3, 3))
     spd = a @ a.transpose(0, 2, 1) + 0.1 * np.eye(3)
     np.testing.assert_allclose(inv_sym3(spd), np.linalg.inv(spd), rtol=1e-8, atol=1e-10)
+
+
+def test_mcl_coarse_keeps_bodies_apart_and_is_plain_mcl_when_small():
+    """Two bodies on a 40 x 40 grid, each painted by its own seeds with noise: clustering
+    through <= 250 items (squares that straddle the boundary are split) gives the two
+    bodies, like MCL on all 1,600 nodes."""
+    rng = np.random.default_rng(3)
+    rows, cols = np.divmod(np.arange(1600), 40)
+    left = cols < 17  # a boundary that cuts through 4 x 4 groups
+    emb = np.where(left[:, None], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0])
+    emb = emb + np.roll(emb, 1, axis=1) * rng.uniform(0.9, 1, (1600, 1)) + rng.uniform(0, 0.01, (1600, 4))
+    bh = normalize_rows(emb)
+    cells = np.stack([rows, cols], axis=1)
+    labels, _ = markov_cluster_coarse(bh, cells, 250)
+    assert adjusted_rand_index(labels, left) == 1.0
+    plain, _ = markov_cluster(bh @ bh.T)
+    np.testing.assert_array_equal(labels, plain)
+    small, _ = markov_cluster_coarse(bh[:50], cells[:50], 64)
+    plain, _ = markov_cluster(bh[:50] @ bh[:50].T)
+    np.testing.assert_array_equal(small, plain)
