@@ -11,6 +11,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 from scipy.sparse.csgraph import connected_components
+from threadpoolctl import ThreadpoolController
 
 from motionbits.config import MotionBitsConfig
 from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
@@ -113,6 +114,7 @@ class MotionBitsSegmenter:
     def __init__(self, config: MotionBitsConfig | None = None, flow: FlowBackend | None = None):
         self.config = config or MotionBitsConfig()
         self.flow = make_flow(flow if flow is not None else self.config.flow)
+        self._blas = ThreadpoolController()
         self.reset()
 
     def reset(self) -> None:
@@ -177,6 +179,12 @@ class MotionBitsSegmenter:
         Returns:
             :class:`MotionBitsResult` with labels at the input size.
         """
+        # The matrix products here are small (at most a few hundred rows): BLAS threads
+        # only add hand-off and spin-waiting, which multiplies their cost on a busy CPU.
+        with self._blas.limit(limits=1, user_api="blas"):
+            return self._update(frame)
+
+    def _update(self, frame: np.ndarray) -> MotionBitsResult:
         frame = as_rgb_frame(frame, name=f"frame {self.frame_index + 1}")
         self._timings = {}
         if self._input_size is not None and frame.shape[:2] != self._input_size:
