@@ -89,6 +89,7 @@ def markov_cluster(
     multiplicity: np.ndarray | None = None,
     prune_total: float | None = None,
     dtype: type = np.float64,
+    block_fn=None,
 ) -> tuple[np.ndarray, int]:
     """Markov clustering of a symmetric non-negative similarity matrix.
 
@@ -106,6 +107,8 @@ def markov_cluster(
         multiplicity: (m,) positive integers, how many identical nodes each row stands for.
         prune_total: M of the pruning threshold, when ``x`` is one block of a larger problem.
         dtype: float type of the iterate (float32 halves the cost of each product).
+        block_fn: optional replacement of the per-block MCL with the signature of ``_mcl_block``
+            (e.g. :meth:`motionbits.torch_ops.TorchOps.mcl_block`).
 
     Returns:
         (labels (m,) int64 in 0..K-1 numbered by first appearance, largest iteration count
@@ -126,8 +129,8 @@ def markov_cluster(
     for b in range(n_blocks):
         idx = np.flatnonzero(block == b)
         sub = x if n_blocks == 1 else x[np.ix_(idx, idx)]
-        lab, it = _mcl_block(sub, mult[idx], expansion, inflation, threshold,
-                             max_iters, stable_iters, dtype)
+        lab, it = (block_fn or _mcl_block)(sub, mult[idx], expansion, inflation, threshold,
+                                           max_iters, stable_iters, dtype)
         labels[idx] = lab + offset
         offset += int(lab.max()) + 1
         iters = max(iters, it)

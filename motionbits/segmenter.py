@@ -12,6 +12,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.sparse.csgraph import connected_components
 
+from motionbits.backend import make_ops
 from motionbits.config import MotionBitsConfig
 from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
 from motionbits.graph import (
@@ -25,7 +26,7 @@ from motionbits.identity import match_ids, refine_history
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
 from motionbits.mcl import markov_cluster, normalized_similarity
 from motionbits.nodes import NodeGrid, sample_bilinear
-from motionbits.propagation import grid_seeds, propagate_labels
+from motionbits.propagation import grid_seeds
 from motionbits.twists import fit_local_motions, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
@@ -113,6 +114,7 @@ class MotionBitsSegmenter:
     def __init__(self, config: MotionBitsConfig | None = None, flow: FlowBackend | None = None):
         self.config = config or MotionBitsConfig()
         self.flow = make_flow(flow if flow is not None else self.config.flow)
+        self._ops = make_ops(self.config.backend)  # twist fits, propagation, MCL
         self.reset()
 
     def reset(self) -> None:
@@ -214,7 +216,7 @@ class MotionBitsSegmenter:
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
                 dtype=self._dtype, nodes=None if cfg.exact else self._nodes_to_fit(
-                    node_flow, prior_nodes))
+                    node_flow, prior_nodes), fit_fn=self._ops.fit_neighbourhoods)
 
         with self._stage("graph"):
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
@@ -243,8 +245,8 @@ class MotionBitsSegmenter:
             starts = np.searchsorted(seed_comp[order], seed_comp[order])
             classes = np.empty(len(seeds), np.int64)
             classes[order] = np.arange(len(seeds)) - starts
-            b = propagate_labels(w, seeds, cfg.propagation_iters, cfg.reseed_every,
-                                 dtype=self._dtype, classes=classes)
+            b = self._ops.propagate_labels(w, seeds, cfg.propagation_iters, cfg.reseed_every,
+                                           dtype=self._dtype, classes=classes)
             n_seeds = np.bincount(seed_comp, minlength=n_comp)
 
         with self._stage("clustering"):
@@ -323,7 +325,7 @@ class MotionBitsSegmenter:
                 normalized_similarity(b[painted]), expansion=cfg.mcl_expansion,
                 inflation=cfg.mcl_inflation, prune=cfg.mcl_prune, max_iters=cfg.mcl_max_iters,
                 stable_iters=None if cfg.exact else cfg.mcl_stable_iters,
-                prune_total=painted_total, dtype=self._dtype)
+                prune_total=painted_total, dtype=self._dtype, block_fn=self._ops.mcl_block)
             out[painted] = lab + 1
         if not painted.any():  # a component without seeds: connected, so one group
             out[:] = 1

@@ -19,6 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=16, help="clip length (default: %(default)s)")
     p.add_argument("--size", default="480x640", help="HxW of the clip (default: %(default)s)")
     p.add_argument("--nodes", type=int, default=MotionBitsConfig.n_nodes, help="grid nodes n (default: %(default)s)")
+    p.add_argument("--backend", default=MotionBitsConfig.backend,
+                   help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] (default: %(default)s)")
     p.set_defaults(func=run)
 
 
@@ -49,10 +51,10 @@ def run(args: argparse.Namespace) -> int:
     from motionbits.synth import demo_clip
 
     size = parse_size(args.size)
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=max(size))
+    config = MotionBitsConfig(n_nodes=args.nodes, max_side=max(size), backend=args.backend)
     clip = demo_clip(n_frames=args.frames, size=size)
     print(f"MotionBits bench: {args.frames} frames {size[0]}x{size[1]}, n = {config.grid_side ** 2} "
-          f"nodes, flow {config.flow}; {platform.processor() or platform.machine()}, "
+          f"nodes, flow {config.flow}, backend {config.backend}; {platform.processor() or platform.machine()}, "
           f"{__import__('os').cpu_count()} CPUs")
     medians, walls = time_clip(clip.frames, config)
     print(f"{'stage':<14}{'median ms':>12}")
