@@ -7,9 +7,14 @@ gives one; every other default is ours, chosen on generated scenes and stated as
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 
-__all__ = ["MotionBitsConfig"]
+__all__ = ["BACKENDS", "MotionBitsConfig"]
+
+#: Accepted values of ``MotionBitsConfig.backend``.
+BACKENDS = ("numpy", "torch", "torch:cpu", "torch:cuda", "torch:cuda:N")
+_BACKEND_RE = re.compile(r"numpy|torch(:cpu|:cuda(:\d+)?)?")
 
 
 @dataclass(frozen=True)
@@ -44,6 +49,11 @@ class MotionBitsConfig:
     # ours: True is the reference computation (float64, MCL iterated until idempotent);
     # False (default) is the fast path: float32, MCL stops once its labels are stable
     exact: bool = False
+    # ours: where propagation, MCL and the local twist fits run. "numpy" (default, CPU);
+    # "torch" = torch on CUDA if available, else on the CPU; "torch:cpu", "torch:cuda",
+    # "torch:cuda:N" pin the device. Same labels as "numpy" up to floating-point rounding;
+    # needs torch (pip install torch), imported only when a segmenter is built with it.
+    backend: str = "numpy"
 
     # --- flow and local twists (ours; the paper uses MemFlow and does not give these) ---
     flow: str = "dis-medium"  # default flow backend: OpenCV DIS, MEDIUM preset
@@ -59,6 +69,9 @@ class MotionBitsConfig:
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
 
     def __post_init__(self) -> None:
+        if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
+            raise ValueError(f"invalid MotionBitsConfig backend {self.backend!r}; choose one of "
+                             + ", ".join(repr(b) for b in BACKENDS) + " (N = GPU index)")
         checks = {
             "n_nodes": self.n_nodes >= 16,
             "k_neighbors": 1 <= self.k_neighbors <= 24,

@@ -95,6 +95,7 @@ def markov_cluster(
     prune_total: float | None = None,
     dtype: type = np.float64,
     factor: np.ndarray | None = None,
+    block_fn=None,
 ) -> tuple[np.ndarray, int]:
     """Markov clustering of a symmetric non-negative similarity matrix.
 
@@ -115,6 +116,8 @@ def markov_cluster(
         factor: optional (m, C) B^ with unit rows and ``x = B^ B^T``: the first expansion
             (with expansion 2) is then computed through it, in m^2 C instead of m^3
             operations, since X D X = B^ (B^T D B^) B^T.
+        block_fn: optional replacement of the per-block MCL with the signature of ``_mcl_block``
+            (e.g. :meth:`motionbits.torch_ops.TorchOps.mcl_block`).
 
     Returns:
         (labels (m,) int64 in 0..K-1 numbered by first appearance, largest iteration count
@@ -136,8 +139,8 @@ def markov_cluster(
         idx = np.flatnonzero(block == b)
         sub = x if n_blocks == 1 else x[np.ix_(idx, idx)]
         fac = None if factor is None else factor[idx]
-        lab, it = _mcl_block(sub, mult[idx], expansion, inflation, threshold,
-                             max_iters, stable_iters, dtype, fac)
+        lab, it = (block_fn or _mcl_block)(sub, mult[idx], expansion, inflation, threshold,
+                                           max_iters, stable_iters, dtype, fac)
         labels[idx] = lab + offset
         offset += int(lab.max()) + 1
         iters = max(iters, it)

@@ -13,6 +13,7 @@ from scipy import ndimage
 from scipy.sparse.csgraph import connected_components
 from threadpoolctl import ThreadpoolController
 
+from motionbits.backend import make_ops
 from motionbits.config import MotionBitsConfig
 from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
 from motionbits.graph import (
@@ -26,7 +27,7 @@ from motionbits.identity import match_ids, refine_history
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
 from motionbits.mcl import markov_cluster_coarse, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
-from motionbits.propagation import grid_seeds, propagate_labels
+from motionbits.propagation import grid_seeds
 from motionbits.twists import fit_local_motions, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
@@ -114,7 +115,8 @@ class MotionBitsSegmenter:
     def __init__(self, config: MotionBitsConfig | None = None, flow: FlowBackend | None = None):
         self.config = config or MotionBitsConfig()
         self.flow = make_flow(flow if flow is not None else self.config.flow)
-        self._blas = ThreadpoolController()
+        self._ops = make_ops(self.config.backend)  # twist fits, propagation, MCL
+        self._threads = ThreadpoolController()  # after make_ops: sees torch's OpenMP too
         self.reset()
 
     def reset(self) -> None:
@@ -179,9 +181,10 @@ class MotionBitsSegmenter:
         Returns:
             :class:`MotionBitsResult` with labels at the input size.
         """
-        # The matrix products here are small (at most a few hundred rows): BLAS threads
-        # only add hand-off and spin-waiting, which multiplies their cost on a busy CPU.
-        with self._blas.limit(limits=1, user_api="blas"):
+        # The matrix products here are small (at most a few hundred rows): BLAS / OpenMP
+        # threads (numpy, scipy, torch on the CPU) only add hand-off and spin-waiting, which
+        # multiplies their cost on a busy CPU. OpenCV's own thread pool is not affected.
+        with self._threads.limit(limits=1):
             return self._update(frame)
 
     def _update(self, frame: np.ndarray) -> MotionBitsResult:
@@ -222,7 +225,7 @@ class MotionBitsSegmenter:
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
                 dtype=self._dtype, nodes=None if cfg.exact else self._nodes_to_fit(
-                    node_flow, prior_nodes))
+                    node_flow, prior_nodes), fit_fn=self._ops.fit_neighbourhoods)
 
         with self._stage("graph"):
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
@@ -251,8 +254,8 @@ class MotionBitsSegmenter:
             starts = np.searchsorted(seed_comp[order], seed_comp[order])
             classes = np.empty(len(seeds), np.int64)
             classes[order] = np.arange(len(seeds)) - starts
-            b = propagate_labels(w, seeds, cfg.propagation_iters, cfg.reseed_every,
-                                 dtype=self._dtype, classes=classes)
+            b = self._ops.propagate_labels(w, seeds, cfg.propagation_iters, cfg.reseed_every,
+                                           dtype=self._dtype, classes=classes)
             n_seeds = np.bincount(seed_comp, minlength=n_comp)
 
         with self._stage("clustering"):
@@ -338,7 +341,7 @@ class MotionBitsSegmenter:
                 len(bh) if cfg.exact else cfg.mcl_max_items, expansion=cfg.mcl_expansion,
                 inflation=cfg.mcl_inflation, prune=cfg.mcl_prune, max_iters=cfg.mcl_max_iters,
                 stable_iters=None if cfg.exact else cfg.mcl_stable_iters,
-                prune_total=painted_total, dtype=self._dtype)
+                prune_total=painted_total, dtype=self._dtype, block_fn=self._ops.mcl_block)
             out[painted] = lab + 1
         if not painted.any():  # a component without seeds: connected, so one group
             out[:] = 1

@@ -98,6 +98,7 @@ def fit_local_motions(
     inlier_threshold: float,
     dtype: type = np.float64,
     nodes: np.ndarray | None = None,
+    fit_fn=None,
 ) -> LocalMotions:
     """RANSAC (all 2-point subsets) + weighted Kabsch for every node's neighbourhood.
 
@@ -113,6 +114,8 @@ def fit_local_motions(
         nodes: optional indices of the nodes to fit; every other node gets the pure
             translation of its own flow (angle 0, all points inliers), which is what a
             neighbourhood that does not move yields up to noise.
+        fit_fn: optional replacement of the neighbourhood fit with the signature of
+            ``_fit_neighbourhoods`` (e.g. :meth:`motionbits.torch_ops.TorchOps.fit_neighbourhoods`).
 
     Returns:
         :class:`LocalMotions` for all n nodes.
@@ -120,8 +123,8 @@ def fit_local_motions(
     n = points.shape[0]
     fit = np.arange(n) if nodes is None else np.asarray(nodes, np.int64)
     idx = np.concatenate([fit[:, None], neighbors[fit]], axis=1)  # (n', m)
-    angle, trans, inliers = _fit_neighbourhoods(points, back_points, idx, weights,
-                                                inlier_threshold, dtype)
+    angle, trans, inliers = (fit_fn or _fit_neighbourhoods)(points, back_points, idx, weights,
+                                                            inlier_threshold, dtype)
     if nodes is not None:
         angle_all = np.zeros(n)
         trans_all = (back_points - points).astype(np.float64)

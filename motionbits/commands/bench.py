@@ -36,6 +36,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size", default="480x640", help="HxW of the clip (default: %(default)s)")
     p.add_argument("--nodes", type=int, default=MotionBitsConfig.n_nodes,
                    help="grid nodes n (default: %(default)s)")
+    p.add_argument("--backend", default=MotionBitsConfig.backend,
+                   help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] "
+                        "(default: %(default)s)")
     p.add_argument("--no-exact", action="store_true", help="skip the exact-path comparison")
     p.add_argument("--no-scaling", action="store_true", help="skip the scaling tables")
     p.add_argument("--scaling-frames", type=int, default=8,
@@ -160,10 +163,10 @@ def run(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     if args.frames < 2:
         raise ValueError("--frames must be >= 2 (the first frame only primes the stream)")
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=max(size))
+    config = MotionBitsConfig(n_nodes=args.nodes, max_side=max(size), backend=args.backend)
     clip = demo_clip(n_frames=args.frames, size=size)
     print(f"MotionBits bench: {args.frames} frames {size[0]}x{size[1]}, n = "
-          f"{config.grid_side ** 2} nodes, flow {config.flow}; "
+          f"{config.grid_side ** 2} nodes, flow {config.flow}, backend {config.backend}; "
           f"{platform.processor() or platform.machine()}, {os.cpu_count()} CPUs")
     print("\nfast path (default)")
     fast = time_clip(clip.frames, config)
@@ -182,15 +185,15 @@ def run(args: argparse.Namespace) -> int:
         h, w = size
         print(f"\nscaling with the number of nodes ({h}x{w}, {args.scaling_frames} frames)")
         ns = [2_500, 10_000, 40_000]
-        _scaling([(f"n = {n:,}", MotionBitsConfig(n_nodes=n, max_side=max(size)), size)
+        _scaling([(f"n = {n:,}", config.with_(n_nodes=n), size)
                   for n in ns], args.scaling_frames, "nodes", ns)
         sizes = [(240, 320), (480, 640), (720, 1280)]
         print(f"\nscaling with the input size (n = {config.grid_side ** 2:,}, processed at "
               f"full resolution, {args.scaling_frames} frames)")
-        _scaling([(f"{sh}x{sw}", MotionBitsConfig(n_nodes=args.nodes, max_side=max(sh, sw)),
+        _scaling([(f"{sh}x{sw}", config.with_(max_side=max(sh, sw)),
                    (sh, sw)) for sh, sw in sizes], args.scaling_frames, "pixels",
                  [sh * sw for sh, sw in sizes])
 
     if args.data:
-        _compare_on_data(args.data, args.max_scenes, MotionBitsConfig())
+        _compare_on_data(args.data, args.max_scenes, MotionBitsConfig(backend=args.backend))
     return 0

@@ -32,6 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--every", type=int, default=1, help="use every K-th frame (default: %(default)s)")
     p.add_argument("--fps", type=float, default=10.0, help="frame rate of overlay.mp4 (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--backend", default=MotionBitsConfig.backend,
+                   help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] (default: %(default)s)")
     p.set_defaults(func=run)
 
 
@@ -52,7 +54,7 @@ def _ground_truth_scores(pred: np.ndarray, gt: np.ndarray) -> dict:
 def run(args: argparse.Namespace) -> int:
     if args.every < 1:
         raise ValueError(f"--every must be >= 1, got {args.every}")
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side)
+    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
     gt = None
     if args.input is None:
         from motionbits.synth import demo_clip
