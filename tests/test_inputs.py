@@ -120,3 +120,23 @@ def test_cli_segment_writes_outputs(tiny, tmp_path):
     missing = subprocess.run([sys.executable, "-m", "motionbits.cli", "segment", "/no/such.mp4",
                               "--out", str(out)], capture_output=True, text=True)
     assert missing.returncode == 2 and "not found" in missing.stderr
+
+
+def test_cli_segment_window(tmp_path):
+    """--start / --every / --frames pick a window; label files keep the video's indices."""
+    import json
+
+    clip = demo_clip(n_frames=9, size=(120, 160))
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for i, f in enumerate(clip.frames):
+        cv2.imwrite(str(folder / f"{i:05d}.png"), cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
+    out = tmp_path / "out"
+    base = [sys.executable, "-m", "motionbits.cli", "segment", str(folder), "--out", str(out),
+            "--nodes", "900", "--max-side", "160", "--quiet"]
+    subprocess.run(base + ["--start", "2", "--every", "2", "--frames", "3"], check=True,
+                   capture_output=True, text=True)
+    assert sorted(p.name for p in (out / "labels").glob("*.png")) == ["00002.png", "00004.png", "00006.png"]
+    assert json.loads((out / "summary.json").read_text())["frame_indices"] == [2, 4, 6]
+    bad = subprocess.run(base + ["--start", "20"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "past the last frame" in bad.stderr

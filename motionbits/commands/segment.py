@@ -30,6 +30,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-side", type=int, default=MotionBitsConfig.max_side,
                    help="working resolution, longest side in px (default: %(default)s)")
     p.add_argument("--every", type=int, default=1, help="use every K-th frame (default: %(default)s)")
+    p.add_argument("--start", type=int, default=0,
+                   help="index of the first frame to use (default: %(default)s)")
+    p.add_argument("--frames", type=int, metavar="N",
+                   help="stop after N used frames (default: all; the paper's windows are 11-16)")
     p.add_argument("--fps", type=float, default=10.0, help="frame rate of overlay.mp4 (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--backend", default=MotionBitsConfig.backend,
@@ -54,6 +58,10 @@ def _ground_truth_scores(pred: np.ndarray, gt: np.ndarray) -> dict:
 def run(args: argparse.Namespace) -> int:
     if args.every < 1:
         raise ValueError(f"--every must be >= 1, got {args.every}")
+    if args.start < 0:
+        raise ValueError(f"--start must be >= 0, got {args.start}")
+    if args.frames is not None and args.frames < 1:
+        raise ValueError(f"--frames must be >= 1, got {args.frames}")
     config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
     gt = None
     if args.input is None:
@@ -74,12 +82,21 @@ def run(args: argparse.Namespace) -> int:
     frame_ms: list[float] = []
     frames_done = []
     result = None
-    bar = tqdm(total=total, unit="frame", disable=args.quiet, desc="segment")
+    # index of the last frame to use (the frame count of some videos is unknown: None)
+    last = float("inf") if args.frames is None else args.start + args.every * (args.frames - 1)
+    if total is not None:
+        if args.start >= total:
+            raise ValueError(f"--start {args.start} is past the last frame ({total} frames)")
+        last = min(last, total - 1)
+    bar = tqdm(total=None if last == float("inf") else (last - args.start) // args.every + 1,
+               unit="frame", disable=args.quiet, desc="segment")
     try:
         for i, frame in enumerate(iter_frames(source)):
-            bar.update(1)
-            if i % args.every:
+            if i > last:
+                break
+            if i < args.start or (i - args.start) % args.every:
                 continue
+            bar.update(1)
             t0 = time.perf_counter()
             result = seg.update(frame)
             frame_ms.append(1000 * (time.perf_counter() - t0))
@@ -111,7 +128,8 @@ def run(args: argparse.Namespace) -> int:
         "frames": len(frames_done),
         "frame_indices": frames_done,
         "size": list(result.labels.shape),
-        "config": {"n_nodes": config.n_nodes, "max_side": config.max_side, "every": args.every},
+        "config": {"n_nodes": config.n_nodes, "max_side": config.max_side, "every": args.every,
+                   "start": args.start, "frames": args.frames},
         "motionbits": [dict(r, in_last_frame=r["id"] in final_ids) for r in
                        sorted(records.values(), key=lambda r: r["id"])],
         "timings_ms": {
