@@ -12,6 +12,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.sparse.csgraph import connected_components
 
+from motionbits.camera import compensate_flow, fit_camera_motion, stabilize_previous
 from motionbits.config import MotionBitsConfig
 from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
 from motionbits.graph import (
@@ -192,13 +193,28 @@ class MotionBitsSegmenter:
         with self._stage("flow"):
             flow_fwd = self.flow(self._prev, cur)
             flow_back = self.flow(cur, self._prev)
-            fb_err = forward_backward_error(flow_back, flow_fwd)
+            # pixels whose backward target leaves the image come back inf or nan (remap
+            # interpolates the inf border): treat both as "no reliable flow"
+            fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
+                                   nan=1e3, posinf=1e3)
 
         with self._stage("twists"):
             pts = grid.points
-            back_pts = pts + sample_bilinear(flow_back, pts)
+            seen_pts = pts + sample_bilinear(flow_back, pts)  # where the nodes came from
             node_err = sample_bilinear(np.minimum(fb_err, 1e3)[..., None], pts)[:, 0]
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
+            # camera motion compensation: motion is measured against the dominant motion
+            # (flow_m, prev_m); label maps are still carried with the true flow
+            flow_m, prev_m, back_pts = flow_back, self._prev, seen_pts
+            if cfg.camera_support < 1.0:
+                cam = fit_camera_motion(pts, seen_pts, reliability > 0.5,
+                                        support=cfg.camera_support,
+                                        threshold=cfg.camera_threshold,
+                                        min_shift=cfg.camera_min_shift)
+                if cam is not None:
+                    flow_m = compensate_flow(flow_back, cam)
+                    prev_m = stabilize_previous(self._prev, cam)
+                    back_pts = pts + sample_bilinear(flow_m, pts)
             motions = fit_local_motions(pts, back_pts, grid.neighbors, reliability,
                                         cfg.ransac_threshold)
 
@@ -211,13 +227,16 @@ class MotionBitsSegmenter:
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             cov = local_covariances(motions.twist, pts, grid.neighbors, cfg.flow_noise)
             raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
-            past = self._project_past_max(back_pts)
+            past = self._project_past_max(seen_pts)
             weights = apply_temporal_constraints(raw, grid.neighbors, hist_nodes, past)
             self._past_max = np.maximum(past, raw)
             # eq. 4: a node belongs to the moving set if it moves now or was part of a
             # MotionBit at the last frame; enclosed holes (e.g. near a centre of rotation,
             # where points barely move but share the body's twist) are filled.
-            active = (motions.displacement > cfg.move_threshold) | (prior_nodes != 0)
+            moving = motions.displacement > cfg.move_threshold
+            if cfg.motion_evidence > 0:
+                moving &= self._photometric_evidence(cur, prev_m, flow_m, ix) > cfg.motion_evidence
+            active = moving | (prior_nodes != 0)
             active = ndimage.binary_fill_holes(active.reshape(grid.rows, grid.cols)).ravel()
             w = symmetric_graph(weights, grid.neighbors, keep=active)
             active_idx = np.flatnonzero(active)
@@ -238,7 +257,7 @@ class MotionBitsSegmenter:
                 node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             labels = assign_pixels(
-                grid, node_ids, ids, thetas, trans, flow_back, _gray(cur), _gray(self._prev),
+                grid, node_ids, ids, thetas, trans, flow_m, _gray(cur), _gray(prev_m),
                 prior, prior_valid, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
@@ -251,6 +270,28 @@ class MotionBitsSegmenter:
             result = self._result(labels, node_ids, ids, thetas, trans, pts)
         result.timings = dict(self._timings)
         return result
+
+    def _photometric_evidence(self, cur: np.ndarray, prev: np.ndarray, flow_back: np.ndarray,
+                              ix: np.ndarray) -> np.ndarray:
+        """Grey levels by which the flow explains each node's neighbourhood better than
+        "nothing moved": mean |I_t - I_t-1| minus mean |I_t - I_t-1 pulled back by the flow|
+        over a window of one grid cell.
+
+        Motion is only observable where the image changes: on textureless regions (a white
+        table, a plain wall) the flow is interpolated from nearby edges -- often from a
+        moving body next to them -- and both hypotheses explain the pixels equally well, so
+        the evidence is ~0. Uniform interiors of moving bodies get ~0 too; they join the
+        moving set by hole filling, enclosed by their evidenced boundary.
+        """
+        grid = self._grid
+        cur_g, prev_g = _gray(cur), _gray(prev)
+        h, w = cur_g.shape
+        xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+        pulled = cv2.remap(prev_g, xs + flow_back[..., 0], ys + flow_back[..., 1],
+                           interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        win = max(3, int(round(max(grid.cell))) | 1)
+        gain = cv2.blur(np.abs(cur_g - prev_g) - np.abs(cur_g - pulled), (win, win))
+        return gain[ix[:, 1], ix[:, 0]]
 
     def _project_past_max(self, back_pts: np.ndarray) -> np.ndarray:
         """Largest earlier weight of each current edge, read from the graph of the previous
