@@ -43,9 +43,9 @@ class MotionBitsConfig:
     fb_sigma: float = 1.0  # px: forward-backward error scale of the Kabsch weights
     flow_noise: float = 0.15  # px: flow noise floor that regularises each covariance
     move_threshold: float = 0.6  # px/frame: a node "moves" above this displacement
-    # ours: a node only counts as moving if its flow explains its neighbourhood's images
-    # better than "static" by this many grey levels (0 = off): textureless regions get
-    # flow smeared in from moving edges, which is no evidence of motion
+    # ours: a new MotionBit is born only if its flow explains its nodes' neighbourhoods
+    # better than "static" by this many grey levels on average (0 = off): textureless
+    # regions get flow smeared in from moving edges, which is no evidence of motion
     motion_evidence: float = 1.0
     # ours: camera motion compensation (motionbits/camera.py). A homography fitted to the
     # node flow by RANSAC is taken as the camera's motion when at least this fraction of

@@ -233,10 +233,7 @@ class MotionBitsSegmenter:
             # eq. 4: a node belongs to the moving set if it moves now or was part of a
             # MotionBit at the last frame; enclosed holes (e.g. near a centre of rotation,
             # where points barely move but share the body's twist) are filled.
-            moving = motions.displacement > cfg.move_threshold
-            if cfg.motion_evidence > 0:
-                moving &= self._photometric_evidence(cur, prev_m, flow_m, ix) > cfg.motion_evidence
-            active = moving | (prior_nodes != 0)
+            active = (motions.displacement > cfg.move_threshold) | (prior_nodes != 0)
             active = ndimage.binary_fill_holes(active.reshape(grid.rows, grid.cols)).ravel()
             w = symmetric_graph(weights, grid.neighbors, keep=active)
             active_idx = np.flatnonzero(active)
@@ -253,8 +250,10 @@ class MotionBitsSegmenter:
             node_cluster[active_idx] = cluster
 
         with self._stage("masks"):
+            evidence = self._photometric_evidence(cur, prev_m, flow_m, ix)
             node_ids, ids, thetas, trans = self._identify(
-                node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability)
+                node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability,
+                evidence)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             labels = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, _gray(cur), _gray(prev_m),
@@ -280,8 +279,8 @@ class MotionBitsSegmenter:
         Motion is only observable where the image changes: on textureless regions (a white
         table, a plain wall) the flow is interpolated from nearby edges -- often from a
         moving body next to them -- and both hypotheses explain the pixels equally well, so
-        the evidence is ~0. Uniform interiors of moving bodies get ~0 too; they join the
-        moving set by hole filling, enclosed by their evidenced boundary.
+        the evidence is ~0. Uniform interiors of moving bodies get ~0 too, so the test
+        is made per cluster (mean over its nodes), not per node.
         """
         grid = self._grid
         cur_g, prev_g = _gray(cur), _gray(prev)
@@ -325,12 +324,16 @@ class MotionBitsSegmenter:
             out[~painted] = out.max() + 1 + comp
         return out
 
-    def _identify(self, node_cluster, displacement, prior_nodes, pts, back_pts, reliability):
+    def _identify(self, node_cluster, displacement, prior_nodes, pts, back_pts, reliability,
+                  evidence):
         """Drop noise clusters, give each cluster a stable id and fit its motion.
 
         A cluster continues the earlier MotionBit it overlaps most (Hungarian on IoU); a
         cluster that continues none is a new MotionBit only if it moves now (eq. 4), which
-        keeps static leftovers of a body's old place from becoming bodies of their own.
+        keeps static leftovers of a body's old place from becoming bodies of their own --
+        and only if its flow explains its images better than "static" (``evidence``, grey
+        levels per node, averaged over the cluster), which keeps textureless regions with
+        flow smeared in from a moving neighbour from becoming bodies.
         """
         cfg = self.config
         counts = np.bincount(node_cluster, minlength=1)
@@ -349,7 +352,8 @@ class MotionBitsSegmenter:
         for c in range(1, len(big) + 1):
             if c in matched:
                 ids.append(matched[c])
-            elif has_interior[c] and np.median(displacement[cluster == c]) > cfg.move_threshold:
+            elif (has_interior[c] and np.median(displacement[cluster == c]) > cfg.move_threshold
+                  and np.mean(evidence[cluster == c]) > cfg.motion_evidence):
                 ids.append(self._next_id)
                 self._next_id += 1
             else:
