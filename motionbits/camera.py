@@ -1,14 +1,16 @@
 """Dominant (camera) motion compensation (ours; the paper assumes a static camera).
 
 A handheld or shaking camera moves every pixel a little, so the whole image looks like it
-moves. When one homography explains the flow of most nodes, that motion is taken as the
+moves. When one similarity transform (rotation, shift, scale; a
+homography's extra freedom extrapolated badly to the image corners on real footage)
+explains the flow of most nodes, that motion is taken as the
 camera's and removed: the previous frame is re-expressed in the current frame's
 coordinates (``prev_stab(p) = prev(H p)``) and the backward flow becomes
 ``H^-1(p + F(p)) - p``, which is 0 on the background.
 
 What this does to twists: a body's image motion B (current -> previous) becomes
-H^-1 o B. When H is close to a similarity (in-plane shake: small rotation + shift, little
-zoom or perspective) the composition of two rigid motions is rigid, so all points of one
+H^-1 o B. With H a similarity of scale ~1 (in-plane shake: small rotation + shift, little
+zoom) the composition of two rigid motions is rigid, so all points of one
 body still share one twist -- now relative to the camera-compensated frame. A strong
 zoom or perspective change makes H^-1 o B only approximately rigid; this is the same
 approximation the static-camera model makes for bodies moving in depth.
@@ -26,24 +28,26 @@ __all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous"]
 
 def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray, *,
                       support: float, threshold: float, min_shift: float) -> np.ndarray | None:
-    """The homography H (current -> previous, ``q ~ H p``) of the dominant motion, or None.
+    """The 3x3 similarity H (current -> previous, ``q ~ H p``) of the dominant motion, or None.
 
     Args:
         points, back_points: (n, 2) node positions p and their backward-flow targets q.
         reliable: (n,) bool, nodes whose flow is trustworthy.
         support: fraction of all reliable nodes that must be RANSAC inliers of H.
         threshold: px, RANSAC reprojection threshold.
-        min_shift: px; H is returned only if it moves some node by more than this.
+        min_shift: px; H is returned only if it moves the nodes by more than this (median).
     """
     p = points[reliable].astype(np.float32)
     q = back_points[reliable].astype(np.float32)
     if len(p) < max(8, support * len(points) * 0.5):
         return None
-    h, inl = cv2.findHomography(p, q, cv2.RANSAC, threshold, maxIters=500, confidence=0.995)
-    if h is None or inl is None or inl.mean() < support:
+    a, inl = cv2.estimateAffinePartial2D(p, q, method=cv2.RANSAC,
+                                         ransacReprojThreshold=threshold, maxIters=500)
+    if a is None or inl is None or inl.mean() < support:
         return None
+    h = np.vstack([a, [0.0, 0.0, 1.0]])
     moved = cv2.perspectiveTransform(points[None].astype(np.float64), h)[0]
-    if np.abs(moved - points).max() <= min_shift:
+    if np.median(np.linalg.norm(moved - points, axis=1)) <= min_shift:
         return None
     return h
 

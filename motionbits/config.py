@@ -47,12 +47,12 @@ class MotionBitsConfig:
     # better than "static" by this many grey levels on average (0 = off): textureless
     # regions get flow smeared in from moving edges, which is no evidence of motion
     motion_evidence: float = 1.0
-    # ours: camera motion compensation (motionbits/camera.py). A homography fitted to the
-    # node flow by RANSAC is taken as the camera's motion when at least this fraction of
-    # the reliable nodes are its inliers (1.0 = off) ...
+    # ours: camera motion compensation (motionbits/camera.py). A similarity transform
+    # fitted to the node flow by RANSAC is taken as the camera's motion when at least
+    # this fraction of the reliable nodes are its inliers (1.0 = off) ...
     camera_support: float = 0.5
     camera_threshold: float = 1.0  # px: ... with this RANSAC inlier threshold ...
-    camera_min_shift: float = 0.25  # px: ... and only if it moves some node more than this
+    camera_min_shift: float = 0.25  # px: ... and only if it moves the nodes more (median)
 
     # --- pixel masks and identities (ours) ---
     min_cluster_nodes: int = 4  # clusters with fewer nodes are noise
