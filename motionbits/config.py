@@ -61,6 +61,16 @@ class MotionBitsConfig:
     fb_sigma: float = 1.0  # px: forward-backward error scale of the Kabsch weights
     flow_noise: float = 0.15  # px: flow noise floor that regularises each covariance
     move_threshold: float = 0.6  # px/frame: a node "moves" above this displacement
+    # ours: a new MotionBit is born only if its flow explains its nodes' neighbourhoods
+    # better than "static" by this many grey levels on average (0 = off): textureless
+    # regions get flow smeared in from moving edges, which is no evidence of motion
+    motion_evidence: float = 1.0
+    # ours: camera motion compensation (motionbits/camera.py). A similarity transform
+    # fitted to the node flow by RANSAC is taken as the camera's motion when at least
+    # this fraction of the reliable nodes are its inliers (1.0 = off) ...
+    camera_support: float = 0.5
+    camera_threshold: float = 1.0  # px: ... with this RANSAC inlier threshold ...
+    camera_min_shift: float = 0.25  # px: ... and only if it moves the nodes more (median)
 
     # --- pixel masks and identities (ours) ---
     min_cluster_nodes: int = 4  # clusters with fewer nodes are noise
@@ -89,6 +99,10 @@ class MotionBitsConfig:
             "fb_sigma": self.fb_sigma > 0,
             "flow_noise": self.flow_noise > 0,
             "move_threshold": self.move_threshold > 0,
+            "motion_evidence": self.motion_evidence >= 0,
+            "camera_support": 0.0 < self.camera_support <= 1.0,
+            "camera_threshold": self.camera_threshold > 0,
+            "camera_min_shift": self.camera_min_shift >= 0,
             "min_cluster_nodes": self.min_cluster_nodes >= 1,
             "prior_bonus": self.prior_bonus >= 0,
             "photo_weight": self.photo_weight >= 0,

@@ -20,6 +20,7 @@ __all__ = [
     "make_flow",
     "warp_nearest",
     "forward_backward_error",
+    "sample_maps",
 ]
 
 
@@ -81,7 +82,8 @@ def _pixel_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
     return xs, ys
 
 
-def _sample_grid(flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def sample_maps(flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cv2.remap maps (x + flow_x, y + flow_y) of an (H, W, 2) flow: two (H, W) float32."""
     xs, ys = _pixel_grid(*flow.shape[:2])
     return xs + flow[..., 0], ys + flow[..., 1]
 
@@ -98,7 +100,7 @@ def warp_nearest(values: np.ndarray, flow_back: np.ndarray, fill: int = 0) -> np
     Returns:
         (H, W) map on the current frame, ``values[p + flow_back(p)]`` (nearest pixel).
     """
-    map_x, map_y = _sample_grid(flow_back)
+    map_x, map_y = sample_maps(flow_back)
     return cv2.remap(
         values, map_x, map_y, interpolation=cv2.INTER_NEAREST,
         borderMode=cv2.BORDER_CONSTANT, borderValue=fill,
@@ -119,7 +121,7 @@ def forward_backward_error(flow_back: np.ndarray, flow_fwd: np.ndarray) -> np.nd
     Returns:
         (H, W) float32 error; pixels whose q leaves the image get +inf.
     """
-    map_x, map_y = _sample_grid(flow_back)
+    map_x, map_y = sample_maps(flow_back)
     fwd_at_q = cv2.remap(
         flow_fwd, map_x, map_y, interpolation=cv2.INTER_LINEAR,
         borderMode=cv2.BORDER_CONSTANT, borderValue=(np.inf, np.inf),

@@ -14,8 +14,15 @@ from scipy.sparse.csgraph import connected_components
 from threadpoolctl import ThreadpoolController
 
 from motionbits.backend import make_ops
+from motionbits.camera import compensate_flow, fit_camera_motion, stabilize_previous
 from motionbits.config import MotionBitsConfig
-from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
+from motionbits.flow import (
+    FlowBackend,
+    forward_backward_error,
+    make_flow,
+    sample_maps,
+    warp_nearest,
+)
 from motionbits.graph import (
     apply_temporal_constraints,
     local_covariances,
@@ -207,7 +214,10 @@ class MotionBitsSegmenter:
         with self._stage("flow"):
             flow_fwd = self.flow(self._prev, cur)
             flow_back = self.flow(cur, self._prev)
-            fb_err = forward_backward_error(flow_back, flow_fwd)
+            # pixels whose backward target leaves the image come back inf or nan (remap
+            # interpolates the inf border): treat both as "no reliable flow"
+            fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
+                                   nan=1e3, posinf=1e3)
             # last frame's labels and label history, carried to this frame
             prior_valid = fb_err < cfg.fb_sigma
             prior = warp_nearest(self._labels, flow_back)
@@ -218,19 +228,30 @@ class MotionBitsSegmenter:
             ix = np.clip(np.round(pts).astype(np.int64), 0, [grid.width - 1, grid.height - 1])
             hist_nodes = history[ix[:, 1], ix[:, 0]]
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
-            node_flow = sample_bilinear(flow_back, pts)
-            back_pts = pts + node_flow
+            seen_pts = pts + sample_bilinear(flow_back, pts)  # where the nodes came from
             node_err = sample_bilinear(np.minimum(fb_err, 1e3)[..., None], pts)[:, 0]
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
+            # camera motion compensation: motion is measured against the dominant motion
+            # (flow_m, prev_m); label maps are still carried with the true flow
+            flow_m, prev_m, back_pts = flow_back, self._prev, seen_pts
+            if cfg.camera_support < 1.0:
+                cam = fit_camera_motion(pts, seen_pts, reliability > 0.5,
+                                        support=cfg.camera_support,
+                                        threshold=cfg.camera_threshold,
+                                        min_shift=cfg.camera_min_shift)
+                if cam is not None:
+                    flow_m = compensate_flow(flow_back, cam)
+                    prev_m = stabilize_previous(self._prev, cam)
+                    back_pts = pts + sample_bilinear(flow_m, pts)
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
                 dtype=self._dtype, nodes=None if cfg.exact else self._nodes_to_fit(
-                    node_flow, prior_nodes), fit_fn=self._ops.fit_neighbourhoods)
+                    back_pts - pts, prior_nodes), fit_fn=self._ops.fit_neighbourhoods)
 
         with self._stage("graph"):
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
             raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
-            past = self._project_past_max(back_pts)
+            past = self._project_past_max(seen_pts)
             weights = apply_temporal_constraints(raw, grid.neighbors, hist_nodes, past)
             self._past_max = np.maximum(past, raw)
             # eq. 4: a node belongs to the moving set if it moves now or was part of a
@@ -271,11 +292,13 @@ class MotionBitsSegmenter:
                 node_cluster[active_idx[members]] = cluster + node_cluster.max()
 
         with self._stage("masks"):
+            evidence = self._photometric_evidence(cur, prev_m, flow_m, ix)
             node_ids, ids, thetas, trans = self._identify(
-                node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability)
+                node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability,
+                evidence)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             labels = assign_pixels(
-                grid, node_ids, ids, thetas, trans, flow_back, _gray(cur), _gray(self._prev),
+                grid, node_ids, ids, thetas, trans, flow_m, _gray(cur), _gray(prev_m),
                 prior, prior_valid, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
@@ -304,6 +327,27 @@ class MotionBitsSegmenter:
             prior_nodes != 0)
         grown = ndimage.binary_dilation(seed.reshape(g.rows, g.cols), np.ones((5, 5), bool))
         return np.flatnonzero(ndimage.binary_fill_holes(grown))
+
+    def _photometric_evidence(self, cur: np.ndarray, prev: np.ndarray, flow_back: np.ndarray,
+                              ix: np.ndarray) -> np.ndarray:
+        """Grey levels by which the flow explains each node's neighbourhood better than
+        "nothing moved": mean |I_t - I_t-1| minus mean |I_t - I_t-1 pulled back by the flow|
+        over a window of one grid cell.
+
+        Motion is only observable where the image changes: on textureless regions (a white
+        table, a plain wall) the flow is interpolated from nearby edges -- often from a
+        moving body next to them -- and both hypotheses explain the pixels equally well, so
+        the evidence is ~0. Uniform interiors of moving bodies get ~0 too, so the test
+        is made per cluster (mean over its nodes), not per node.
+        """
+        grid = self._grid
+        cur_g, prev_g = _gray(cur), _gray(prev)
+        map_x, map_y = sample_maps(flow_back)
+        pulled = cv2.remap(prev_g, map_x, map_y, interpolation=cv2.INTER_LINEAR,
+                           borderMode=cv2.BORDER_REPLICATE)
+        win = max(3, int(round(max(grid.cell))) | 1)
+        gain = cv2.blur(np.abs(cur_g - prev_g) - np.abs(cur_g - pulled), (win, win))
+        return gain[ix[:, 1], ix[:, 0]]
 
     def _project_past_max(self, back_pts: np.ndarray) -> np.ndarray:
         """Largest earlier weight of each current edge, read from the graph of the previous
@@ -352,12 +396,16 @@ class MotionBitsSegmenter:
             out[~painted] = out.max() + 1 + comp
         return out
 
-    def _identify(self, node_cluster, displacement, prior_nodes, pts, back_pts, reliability):
+    def _identify(self, node_cluster, displacement, prior_nodes, pts, back_pts, reliability,
+                  evidence):
         """Drop noise clusters, give each cluster a stable id and fit its motion.
 
         A cluster continues the earlier MotionBit it overlaps most (Hungarian on IoU); a
         cluster that continues none is a new MotionBit only if it moves now (eq. 4), which
-        keeps static leftovers of a body's old place from becoming bodies of their own.
+        keeps static leftovers of a body's old place from becoming bodies of their own --
+        and only if its flow explains its images better than "static" (``evidence``, grey
+        levels per node, averaged over the cluster), which keeps textureless regions with
+        flow smeared in from a moving neighbour from becoming bodies.
         """
         cfg = self.config
         counts = np.bincount(node_cluster, minlength=1)
@@ -376,7 +424,8 @@ class MotionBitsSegmenter:
         for c in range(1, len(big) + 1):
             if c in matched:
                 ids.append(matched[c])
-            elif has_interior[c] and np.median(displacement[cluster == c]) > cfg.move_threshold:
+            elif (has_interior[c] and np.median(displacement[cluster == c]) > cfg.move_threshold
+                  and np.mean(evidence[cluster == c]) > cfg.motion_evidence):
                 ids.append(self._next_id)
                 self._next_id += 1
             else:

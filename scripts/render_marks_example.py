@@ -13,7 +13,7 @@ they match a video rendered from the same folder. Also writes OUT.json (mark met
 and, with --gif, the whole marked video.
 
 Example (once the segmenter has run):
-    motionbits segment ../shared/data/real/02_cups.mp4 -o runs/cups
+    motionbits segment ../shared/data/real/02_cups.mp4 --out runs/cups --start 60 --every 4 --frames 16
     python scripts/render_marks_example.py ../shared/data/real/02_cups.mp4 runs/cups/labels \
         docs/img/somprompt_cups.png
 """
