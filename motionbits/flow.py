@@ -92,13 +92,14 @@ def warp_nearest(values: np.ndarray, flow_back: np.ndarray, fill: int = 0) -> np
     """Carry a per-pixel map from the previous frame to the current one.
 
     Args:
-        values: (H, W) map on the previous frame (any integer or float dtype that OpenCV
-            remaps: int32, float32, uint8, uint16).
+        values: (H, W) or (H, W, C) map on the previous frame (any integer or float dtype
+            that OpenCV remaps: int32, float32, uint8, uint16; C <= 4).
         flow_back: (H, W, 2) float32 flow from the current frame to the previous one.
         fill: value for pixels whose source lies outside the image.
 
     Returns:
-        (H, W) map on the current frame, ``values[p + flow_back(p)]`` (nearest pixel).
+        map of the same shape on the current frame, ``values[p + flow_back(p)]`` (nearest
+        pixel).
     """
     map_x, map_y = sample_maps(flow_back)
     return cv2.remap(

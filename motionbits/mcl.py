@@ -107,9 +107,9 @@ def markov_cluster(
         prune: entries below ``prune / M`` are zeroed (M = ``prune_total``, by default the
             total multiplicity).
         max_iters: iteration cap.
-        stable_iters: also stop once the labels are unchanged for this many iterations (MCL
-            at low inflation converges slowly while its clusters settle early); ``None``
-            runs every block until its iterate is idempotent (the reference computation).
+        stable_iters: stop once the labels are unchanged for this many iterations (MCL at
+            low inflation converges slowly while its clusters settle early); ``None`` runs
+            every block until its iterate is idempotent (the reference computation).
         multiplicity: (m,) positive integers, how many identical nodes each row stands for.
         prune_total: M of the pruning threshold, when ``x`` is one block of a larger problem.
         dtype: float type of the iterate (float32 halves the cost of each product).
@@ -184,9 +184,10 @@ def _mcl_block(x, mult, expansion, inflation, threshold, max_iters, stable_iters
         if threshold > 0:
             m[m < threshold] = 0.0
             m = _normalize_columns(m, mult)
-        if np.abs(m - prev).max() <= tol:
-            break
-        if stable_iters is not None:
+        if stable_iters is None:  # the reference: iterate until idempotent
+            if np.abs(m - prev).max() <= tol:
+                break
+        else:
             new = attractor_labels(m)
             same = same + 1 if np.array_equal(new, labels) else 0
             labels = new

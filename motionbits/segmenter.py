@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from contextlib import contextmanager
+from functools import cache
 from dataclasses import dataclass, field
 from typing import Iterator
 
@@ -220,8 +221,8 @@ class MotionBitsSegmenter:
                                    nan=1e3, posinf=1e3)
             # last frame's labels and label history, carried to this frame
             prior_valid = fb_err < cfg.fb_sigma
-            prior = warp_nearest(self._labels, flow_back)
-            history = warp_nearest(self._history, flow_back)
+            carried = warp_nearest(np.dstack([self._labels, self._history]), flow_back)
+            prior, history = carried[..., 0], carried[..., 1]
 
         with self._stage("twists"):
             pts = grid.points
@@ -292,13 +293,15 @@ class MotionBitsSegmenter:
                 node_cluster[active_idx[members]] = cluster + node_cluster.max()
 
         with self._stage("masks"):
-            evidence = self._photometric_evidence(cur, prev_m, flow_m, ix)
+            cur_g, prev_g = _gray(cur), _gray(prev_m)
+            # computed only if some cluster is a candidate for a new MotionBit
+            evidence = cache(lambda: self._photometric_evidence(cur_g, prev_g, flow_m, ix))
             node_ids, ids, thetas, trans = self._identify(
                 node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability,
                 evidence)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             labels = assign_pixels(
-                grid, node_ids, ids, thetas, trans, flow_m, _gray(cur), _gray(prev_m),
+                grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
                 prior, prior_valid, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
@@ -328,7 +331,7 @@ class MotionBitsSegmenter:
         grown = ndimage.binary_dilation(seed.reshape(g.rows, g.cols), np.ones((5, 5), bool))
         return np.flatnonzero(ndimage.binary_fill_holes(grown))
 
-    def _photometric_evidence(self, cur: np.ndarray, prev: np.ndarray, flow_back: np.ndarray,
+    def _photometric_evidence(self, cur_g: np.ndarray, prev_g: np.ndarray, flow_back: np.ndarray,
                               ix: np.ndarray) -> np.ndarray:
         """Grey levels by which the flow explains each node's neighbourhood better than
         "nothing moved": mean |I_t - I_t-1| minus mean |I_t - I_t-1 pulled back by the flow|
@@ -341,7 +344,6 @@ class MotionBitsSegmenter:
         is made per cluster (mean over its nodes), not per node.
         """
         grid = self._grid
-        cur_g, prev_g = _gray(cur), _gray(prev)
         map_x, map_y = sample_maps(flow_back)
         pulled = cv2.remap(prev_g, map_x, map_y, interpolation=cv2.INTER_LINEAR,
                            borderMode=cv2.BORDER_REPLICATE)
@@ -403,7 +405,7 @@ class MotionBitsSegmenter:
         A cluster continues the earlier MotionBit it overlaps most (Hungarian on IoU); a
         cluster that continues none is a new MotionBit only if it moves now (eq. 4), which
         keeps static leftovers of a body's old place from becoming bodies of their own --
-        and only if its flow explains its images better than "static" (``evidence``, grey
+        and only if its flow explains its images better than "static" (``evidence()``, grey
         levels per node, averaged over the cluster), which keeps textureless regions with
         flow smeared in from a moving neighbour from becoming bodies.
         """
@@ -425,7 +427,7 @@ class MotionBitsSegmenter:
             if c in matched:
                 ids.append(matched[c])
             elif (has_interior[c] and np.median(displacement[cluster == c]) > cfg.move_threshold
-                  and np.mean(evidence[cluster == c]) > cfg.motion_evidence):
+                  and np.mean(evidence()[cluster == c]) > cfg.motion_evidence):
                 ids.append(self._next_id)
                 self._next_id += 1
             else:

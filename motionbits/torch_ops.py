@@ -228,9 +228,10 @@ class TorchOps:
             m = normalize(m.pow(inflation))
             if threshold > 0:
                 m = normalize(m.masked_fill(m < thr, 0.0))
-            if (m - prev).abs().max().item() <= tol:
-                break
-            if stable_iters is not None:
+            if stable_iters is None:  # the reference: iterate until idempotent
+                if (m - prev).abs().max().item() <= tol:
+                    break
+            else:
                 new = self._attractors(m)
                 same = same + 1 if np.array_equal(new, labels) else 0
                 labels = new
