@@ -23,6 +23,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motionbits.flow import pixel_grid, sample_maps
+
 __all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous"]
 
 
@@ -55,10 +57,10 @@ def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.
 def compensate_flow(flow_back: np.ndarray, h: np.ndarray) -> np.ndarray:
     """(H, W, 2) backward flow relative to the camera: ``H^-1(p + F(p)) - p``."""
     ht, wd = flow_back.shape[:2]
-    xs, ys = np.meshgrid(np.arange(wd, dtype=np.float64), np.arange(ht, dtype=np.float64))
-    q = np.stack([xs + flow_back[..., 0], ys + flow_back[..., 1]], -1).reshape(1, -1, 2)
+    xs, ys = pixel_grid(ht, wd)
+    q = np.stack(sample_maps(flow_back), -1).reshape(1, -1, 2)
     back = cv2.perspectiveTransform(q, np.linalg.inv(h))[0].reshape(ht, wd, 2)
-    return np.stack([back[..., 0] - xs, back[..., 1] - ys], -1).astype(np.float32)
+    return np.stack([back[..., 0] - xs, back[..., 1] - ys], -1)
 
 
 def stabilize_previous(prev: np.ndarray, h: np.ndarray) -> np.ndarray:

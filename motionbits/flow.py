@@ -21,6 +21,7 @@ __all__ = [
     "warp_nearest",
     "forward_backward_error",
     "sample_maps",
+    "pixel_grid",
 ]
 
 
@@ -76,7 +77,8 @@ def make_flow(spec: str | FlowBackend) -> FlowBackend:
 
 
 @lru_cache(maxsize=4)
-def _pixel_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+def pixel_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """(H, W) float32 x and y coordinates of every pixel (cached, read-only)."""
     xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
     xs.flags.writeable = ys.flags.writeable = False
     return xs, ys
@@ -84,7 +86,7 @@ def _pixel_grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
 
 def sample_maps(flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """cv2.remap maps (x + flow_x, y + flow_y) of an (H, W, 2) flow: two (H, W) float32."""
-    xs, ys = _pixel_grid(*flow.shape[:2])
+    xs, ys = pixel_grid(*flow.shape[:2])
     return xs + flow[..., 0], ys + flow[..., 1]
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -58,7 +59,7 @@ class NodeGrid:
         r = np.clip(np.floor(xy[:, 1] / ch), 0, self.rows - 1).astype(np.int64)
         return r * self.cols + c
 
-    @property
+    @cached_property
     def pixel_nodes(self) -> tuple[np.ndarray, np.ndarray]:
         """(height,) grid row of each pixel row and (width,) grid column of each pixel
         column under nearest-node upsampling (:meth:`to_image`)."""

@@ -211,20 +211,15 @@ class TorchOps:
                 f = self._tensor(factor, dtype)
                 inner = f.T @ (f * (mult * inv_sums)[:, None])
                 m = (f @ inner) @ (f.T * inv_sums)
-                m = normalize(m.pow(inflation))
-                if threshold > 0:
-                    m = normalize(m.masked_fill(m < thr, 0.0))
-                if stable_iters is not None:
-                    labels, same = self._attractors(m), 0
-                continue
-            for _ in range(expansion - 1):
-                live = torch.nonzero(m.any(dim=1)).squeeze(1)
-                if len(live) == m.shape[0]:
-                    m = (m * mult) @ m
-                else:  # rows without mass stay zero: multiply only the others
-                    nxt = torch.zeros_like(m)
-                    nxt[live] = (m[live][:, live] * mult[live]) @ m[live]
-                    m = nxt
+            else:
+                for _ in range(expansion - 1):
+                    live = torch.nonzero(m.any(dim=1)).squeeze(1)
+                    if len(live) == m.shape[0]:
+                        m = (m * mult) @ m
+                    else:  # rows without mass stay zero: multiply only the others
+                        nxt = torch.zeros_like(m)
+                        nxt[live] = (m[live][:, live] * mult[live]) @ m[live]
+                        m = nxt
             m = normalize(m.pow(inflation))
             if threshold > 0:
                 m = normalize(m.masked_fill(m < thr, 0.0))
