@@ -78,6 +78,13 @@ class MotionBitsConfig:
     photo_weight: float = 0.1  # px of mask cost per grey level of photometric residual
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
 
+    # --- temporal window (ours; the paper's constraints span the whole video) ---
+    # ours: None = the temporal constraints (label history, past edge maxima) cover every
+    # earlier frame, as in the paper; N >= 2 = only about the last N frames (more than
+    # 3N/4 and at most N; motionbits/temporal.py), so that long videos do not keep old
+    # splits forever
+    window: int | None = None
+
     def __post_init__(self) -> None:
         if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
             raise ValueError(f"invalid MotionBitsConfig backend {self.backend!r}; choose one of "
@@ -107,6 +114,7 @@ class MotionBitsConfig:
             "prior_bonus": self.prior_bonus >= 0,
             "photo_weight": self.photo_weight >= 0,
             "match_iou": 0.0 <= self.match_iou <= 1.0,
+            "window": self.window is None or (isinstance(self.window, int) and self.window >= 2),
         }
         bad = [name for name, ok in checks.items() if not ok]
         if bad:

@@ -22,7 +22,6 @@ from motionbits.flow import (
     forward_backward_error,
     make_flow,
     sample_maps,
-    warp_nearest,
 )
 from motionbits.graph import (
     apply_temporal_constraints,
@@ -31,11 +30,12 @@ from motionbits.graph import (
     twist_noise_covariance,
     twist_edge_weights,
 )
-from motionbits.identity import match_ids, refine_history
+from motionbits.identity import match_ids
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
 from motionbits.mcl import markov_cluster_coarse, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds
+from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
@@ -103,7 +103,9 @@ class MotionBitsSegmenter:
     Feed frames one at a time with :meth:`update`; each call returns the MotionBits of that
     frame using only the frames seen so far. The first frame returns all-background labels.
     State is constant in size: the previous frame, the previous label map, one integer map
-    of the label history and the largest past weight of each graph edge.
+    of the label history and the largest past weight of each graph edge (with
+    ``config.window``, a few staggered copies of the last two: see
+    :mod:`motionbits.temporal`).
 
     Args:
         config: parameters; defaults are the paper's.
@@ -136,8 +138,8 @@ class MotionBitsSegmenter:
         self._seeds: np.ndarray | None = None
         self._prev: np.ndarray | None = None
         self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
-        self._history: np.ndarray | None = None  # (h, w) int32 meet of all label partitions
-        self._past_max: np.ndarray | None = None  # (n, k) largest earlier edge weights
+        # label history and largest earlier edge weights (whole video or config.window)
+        self._temporal: TemporalState | None = None
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
         self._first_moved: dict[int, int] = {}
@@ -160,8 +162,7 @@ class MotionBitsSegmenter:
         self._grid = NodeGrid.build(hw, ww, self.config.grid_side, self.config.k_neighbors)
         self._seeds = grid_seeds(self._grid.rows, self._grid.cols, self.config.seed_stride)
         self._labels = np.zeros((hw, ww), np.int32)
-        self._history = np.zeros((hw, ww), np.int32)
-        self._past_max = np.zeros(self._grid.neighbors.shape)
+        self._temporal = TemporalState((hw, ww), self._grid.neighbors.shape, self.config.window)
         self._noise_cov = twist_noise_covariance(self._grid.points, self._grid.neighbors,
                                                  self.config.flow_noise)
 
@@ -221,8 +222,7 @@ class MotionBitsSegmenter:
                                    nan=1e3, posinf=1e3)
             # last frame's labels and label history, carried to this frame
             prior_valid = fb_err < cfg.fb_sigma
-            carried = warp_nearest(np.dstack([self._labels, self._history]), flow_back)
-            prior, history = carried[..., 0], carried[..., 1]
+            prior, history = self._temporal.carry(self._labels, flow_back)
 
         with self._stage("twists"):
             pts = grid.points
@@ -252,9 +252,8 @@ class MotionBitsSegmenter:
         with self._stage("graph"):
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
             raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
-            past = self._project_past_max(seen_pts)
+            past = self._temporal.project(lambda pm: self._project_past_max(seen_pts, pm))
             weights = apply_temporal_constraints(raw, grid.neighbors, hist_nodes, past)
-            self._past_max = np.maximum(past, raw)
             # eq. 4: a node belongs to the moving set if it moves now or was part of a
             # MotionBit at the last frame; enclosed holes (e.g. near a centre of rotation,
             # where points barely move but share the body's twist) are filled.
@@ -308,7 +307,7 @@ class MotionBitsSegmenter:
             labels = remove_specks(labels, min_area=int(np.ceil(2 * cw * ch)))
 
         with self._stage("bookkeeping"):
-            self._history = refine_history(history, labels, margin=int(np.ceil(max(grid.cell))))
+            self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             self._prev = cur
             result = self._result(labels, node_ids, ids, thetas, trans, pts)
@@ -351,16 +350,18 @@ class MotionBitsSegmenter:
         gain = cv2.blur(np.abs(cur_g - prev_g) - np.abs(cur_g - pulled), (win, win))
         return gain[ix[:, 1], ix[:, 0]]
 
-    def _project_past_max(self, back_pts: np.ndarray) -> np.ndarray:
+    def _project_past_max(self, back_pts: np.ndarray, past_max: np.ndarray) -> np.ndarray:
         """Largest earlier weight of each current edge, read from the graph of the previous
-        frame at the nodes nearest to where the edge's endpoints came from."""
+        frame at the nodes nearest to where the edge's endpoints came from.
+
+        ``past_max``: (..., n, k) edge weights of the previous graph; returns (..., n, k)."""
         grid = self._grid
         src = grid.nearest_node(back_pts)
         si = src[:, None]
         sj = src[grid.neighbors]
         hit = grid.neighbors[si[:, 0]][:, None, :] == sj[:, :, None]  # (n, k, k)
-        vals = np.where(hit, self._past_max[si[:, 0]][:, None, :], 0.0)
-        return vals.max(axis=2)
+        vals = np.where(hit, past_max[..., si[:, 0], None, :], 0.0)
+        return vals.max(axis=-1)
 
     @property
     def _dtype(self) -> type:
