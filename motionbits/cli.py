@@ -9,6 +9,7 @@ import sys
 # Each module defines ``register(subparsers)``, which adds its parser and sets ``func``.
 COMMAND_MODULES = (
     "motionbits.commands.segment",
+    "motionbits.commands.batch",
     "motionbits.commands.bench",
     "motionbits.commands.eval",
     "motionbits.commands.synth",

@@ -17,7 +17,7 @@ from motionbits.segmenter import STAGES, MotionBitsSegmenter
 from motionbits.video import count_frames, iter_frames
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser(
         "segment", help="segment the moving rigid bodies of a video",
         description="Write DIR/labels/NNNNN.png (16-bit label maps, 0 = background), "
@@ -26,6 +26,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "exact ground truth).")
     p.add_argument("input", nargs="?", help="video file or folder of images (default: built-in demo clip)")
     p.add_argument("--out", default="motionbits_out", help="output folder (default: %(default)s)")
+    add_video_options(p)
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+    return p
+
+
+def add_video_options(p: argparse.ArgumentParser) -> None:
+    """The options that say how one video is segmented (shared with ``motionbits batch``)."""
     p.add_argument("--nodes", type=int, default=MotionBitsConfig.n_nodes, help="grid nodes n (default: %(default)s)")
     p.add_argument("--max-side", type=int, default=MotionBitsConfig.max_side,
                    help="working resolution, longest side in px (default: %(default)s)")
@@ -35,10 +43,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, metavar="N",
                    help="stop after N used frames (default: all; the paper's windows are 11-16)")
     p.add_argument("--fps", type=float, default=10.0, help="frame rate of overlay.mp4 (default: %(default)s)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--backend", default=MotionBitsConfig.backend,
                    help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] (default: %(default)s)")
-    p.set_defaults(func=run)
+    p.add_argument("--window", type=int, metavar="N",
+                   help="temporal constraints over about the last N frames only (more than 3N/4, "
+                        "at most N; default: the whole video, as in the paper)")
 
 
 def _ground_truth_scores(pred: np.ndarray, gt: np.ndarray) -> dict:
@@ -55,14 +64,17 @@ def _ground_truth_scores(pred: np.ndarray, gt: np.ndarray) -> dict:
     return {"bodies": scores, "background_precision": precision}
 
 
-def run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace, progress=tqdm) -> int:
+    """Segment ``args.input`` into ``args.out``; ``progress`` makes the per-frame bar
+    (tqdm's signature; ``motionbits batch`` passes one that reports to its parent)."""
     if args.every < 1:
         raise ValueError(f"--every must be >= 1, got {args.every}")
     if args.start < 0:
         raise ValueError(f"--start must be >= 0, got {args.start}")
     if args.frames is not None and args.frames < 1:
         raise ValueError(f"--frames must be >= 1, got {args.frames}")
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
+    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend,
+                              window=args.window)
     gt = None
     if args.input is None:
         from motionbits.synth import demo_clip
@@ -88,8 +100,8 @@ def run(args: argparse.Namespace) -> int:
         if args.start >= total:
             raise ValueError(f"--start {args.start} is past the last frame ({total} frames)")
         last = min(last, total - 1)
-    bar = tqdm(total=None if last == float("inf") else (last - args.start) // args.every + 1,
-               unit="frame", disable=args.quiet, desc="segment")
+    bar = progress(total=None if last == float("inf") else (last - args.start) // args.every + 1,
+                   unit="frame", disable=args.quiet, desc="segment")
     try:
         for i, frame in enumerate(iter_frames(source)):
             if i > last:
@@ -129,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
         "frame_indices": frames_done,
         "size": list(result.labels.shape),
         "config": {"n_nodes": config.n_nodes, "max_side": config.max_side, "every": args.every,
-                   "start": args.start, "frames": args.frames},
+                   "start": args.start, "frames": args.frames, "window": config.window},
         "motionbits": [dict(r, in_last_frame=r["id"] in final_ids) for r in
                        sorted(records.values(), key=lambda r: r["id"])],
         "timings_ms": {

@@ -1,0 +1,127 @@
+"""A resumable batch: which videos are left, the engines, the journal and the progress bars."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from tqdm import tqdm
+
+from motionbits.batch.inputs import BatchInput
+from motionbits.batch.job import clean_partial, remove_partial_dir
+from motionbits.batch.journal import Journal
+
+__all__ = ["BatchReport", "run_batch", "ENGINES", "JOURNAL_NAME"]
+
+ENGINES = ("local", "ray")
+JOURNAL_NAME = "batch.jsonl"
+
+
+@dataclass(frozen=True)
+class BatchReport:
+    """What one ``run_batch`` call did.
+
+    Attributes:
+        done, failed: videos finished now, by status.
+        skipped: videos already recorded by an earlier run (not redone).
+        cleaned: unfinished outputs of interrupted runs removed at the start.
+        seconds: wall time of the call.
+    """
+
+    done: int
+    failed: int
+    skipped: int
+    cleaned: int
+    seconds: float
+
+
+class _Bars:
+    """One bar for the batch (videos) and one per video in progress (frames)."""
+
+    def __init__(self, total: int, quiet: bool):
+        self.quiet = quiet
+        self.batch = tqdm(total=total, unit="video", desc="batch", disable=quiet, position=0)
+        self.videos: dict[str, tqdm] = {}
+
+    def frame(self, name: str, done: int, total: int | None) -> None:
+        if self.quiet:
+            return
+        bar = self.videos.get(name)
+        if bar is None:  # the lowest free line below the batch bar
+            taken = {b.pos for b in self.videos.values()}
+            line = next(i for i in range(1, len(taken) + 2) if i not in taken)
+            bar = self.videos[name] = tqdm(total=total, unit="frame", desc=name[:24],
+                                           leave=False, position=line)
+            bar.pos = line
+        bar.update(done - bar.n)
+
+    def video(self, record: dict, name: str) -> None:
+        bar = self.videos.pop(name, None)
+        if bar is not None:
+            bar.close()
+        self.batch.update(1)
+        if record["status"] == "failed":
+            self.batch.write(f"failed: {record['input']}: {record['error']}")
+
+    def close(self) -> None:
+        for bar in self.videos.values():
+            bar.close()
+        self.batch.close()
+
+
+def run_batch(items: list[BatchInput], out_dir: str, options: dict | None = None, *,
+              engine: str = "local", workers: int | None = None, address: str | None = None,
+              retry_failed: bool = False, quiet: bool = False) -> BatchReport:
+    """Segment every video of ``items`` into ``out_dir/<name>/``, resuming an earlier run.
+
+    Videos with a record in ``out_dir/batch.jsonl`` are skipped ("done" always, "failed"
+    unless ``retry_failed``); outputs of interrupted runs (``out_dir/.partial``) are
+    removed first. Each finished video gets one record, written by this process.
+
+    Args:
+        items: the videos (see :func:`motionbits.batch.expand_inputs`).
+        out_dir: the batch folder (created if missing).
+        options: ``segment`` options by argument name (``nodes``, ``window``, ...).
+        engine: "local" (a process pool) or "ray".
+        workers: processes (local; default: the CPUs) or CPUs of a local Ray instance.
+        address: Ray cluster to join instead of starting one.
+        retry_failed: run videos recorded as failed again.
+        quiet: no progress bars.
+    """
+    if engine not in ENGINES:
+        raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")
+    if workers is not None and workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {workers}")
+    t0 = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    journal = Journal(out / JOURNAL_NAME)
+    cleaned = clean_partial(out)
+    skip = {"done", "failed"} - ({"failed"} if retry_failed else set())
+    todo = [it for it in items if journal.status(it.path) not in skip]
+    names = {it.path: it.name for it in todo}
+    counts = {"done": 0, "failed": 0}
+    bars = _Bars(len(todo), quiet)
+
+    def on_record(record: dict) -> None:
+        journal.append(record)
+        counts[record["status"]] += 1
+        bars.video(record, names[record["input"]])
+
+    kwargs = dict(on_record=on_record, on_progress=bars.frame)
+    try:
+        if todo and engine == "local":
+            from motionbits.batch.local import default_workers, run_local
+
+            run_local(todo, str(out), options or {}, workers=workers or default_workers(),
+                      **kwargs)
+        elif todo:
+            from motionbits.batch.ray_engine import run_ray
+
+            run_ray(todo, str(out), options or {}, address=address, workers=workers, **kwargs)
+    finally:
+        bars.close()
+        remove_partial_dir(out)
+    return BatchReport(counts["done"], counts["failed"], len(items) - len(todo), cleaned,
+                       time.perf_counter() - t0)
