@@ -6,7 +6,8 @@ the flow (see :mod:`motionbits.identity`) -- and the largest earlier weight of e
 edge. Both are folds (meet, max) that cannot be undone when a frame leaves a window, so
 a window of N frames keeps P staggered copies of the state, each restarted every N frames
 and N / P frames after the previous one; the constraints read the copy restarted longest
-ago, which covers the last m folded frames, N - N // P < m <= N. Without a window there is
+ago, which covers the last m folded frames, N - ceil(N / P) < m <= N (so m > 3N/4 with
+the default P = 4). Without a window there is
 one copy, never restarted: the paper's whole-video constraints, at constant memory.
 """
 

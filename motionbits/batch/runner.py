@@ -25,6 +25,7 @@ class BatchReport:
     Attributes:
         done, failed: videos finished now, by status.
         skipped: videos already recorded by an earlier run (not redone).
+        failed_total: videos of the batch whose record says failed (now or earlier).
         cleaned: unfinished outputs of interrupted runs removed at the start.
         seconds: wall time of the call.
     """
@@ -32,6 +33,7 @@ class BatchReport:
     done: int
     failed: int
     skipped: int
+    failed_total: int
     cleaned: int
     seconds: float
 
@@ -120,8 +122,10 @@ def run_batch(items: list[BatchInput], out_dir: str, options: dict | None = None
             from motionbits.batch.ray_engine import run_ray
 
             run_ray(todo, str(out), options or {}, address=address, workers=workers, **kwargs)
+        clean_partial(out)  # what workers killed during this run left
     finally:
         bars.close()
         remove_partial_dir(out)
-    return BatchReport(counts["done"], counts["failed"], len(items) - len(todo), cleaned,
-                       time.perf_counter() - t0)
+    failed_total = sum(journal.status(it.path) == "failed" for it in items)
+    return BatchReport(counts["done"], counts["failed"], len(items) - len(todo), failed_total,
+                       cleaned, time.perf_counter() - t0)

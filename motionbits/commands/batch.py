@@ -14,7 +14,8 @@ examples:
   motionbits batch /data/bridge --out runs/bridge --window 30      # every video below
   motionbits batch list.txt --out runs/x --engine ray --address auto
 
-Run the same command again to resume after Ctrl-C, a crash or kill -9: videos recorded in
+Exit status 0 when every video is done, 1 when some failed (see their "error"), 2 on
+bad options. Run the same command again to resume after Ctrl-C, a crash or kill -9: videos recorded in
 DIR/batch.jsonl are not redone, and unfinished outputs are removed.
 """
 
@@ -63,5 +64,6 @@ def run(args: argparse.Namespace) -> int:
     report = run_batch(items, args.out, options, engine=args.engine, workers=args.workers,
                        address=args.address, retry_failed=args.retry_failed, quiet=args.quiet)
     print(f"{len(items)} videos: {report.done} done, {report.failed} failed now, "
-          f"{report.skipped} already recorded; {report.seconds:.1f} s; see {args.out}/batch.jsonl")
-    return 1 if report.failed else 0
+          f"{report.skipped} already recorded ({report.failed_total} failed in all); "
+          f"{report.seconds:.1f} s; see {args.out}/batch.jsonl")
+    return 1 if report.failed_total else 0
