@@ -34,6 +34,10 @@ def _init_worker(progress_queue) -> None:
     global _progress_queue
     _progress_queue = progress_queue
     _die_with_parent()
+    # Ctrl-C reaches the whole process group: a worker stops at once, without a traceback,
+    # and the batch process reports the interruption (the video is redone on resume)
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, lambda *_: os._exit(130))
     import cv2
     from threadpoolctl import threadpool_limits
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from motionbits.commands.segment import add_video_options
 
@@ -61,8 +62,14 @@ def run(args: argparse.Namespace) -> int:
     MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend,
                      window=args.window)
     items = expand_inputs(args.inputs)
-    report = run_batch(items, args.out, options, engine=args.engine, workers=args.workers,
-                       address=args.address, retry_failed=args.retry_failed, quiet=args.quiet)
+    try:
+        report = run_batch(items, args.out, options, engine=args.engine, workers=args.workers,
+                           address=args.address, retry_failed=args.retry_failed,
+                           quiet=args.quiet)
+    except KeyboardInterrupt:
+        print(f"interrupted; finished videos are recorded in {args.out}/batch.jsonl: run the "
+              "same command again to resume", file=sys.stderr)
+        return 130
     print(f"{len(items)} videos: {report.done} done, {report.failed} failed now, "
           f"{report.skipped} already recorded ({report.failed_total} failed in all); "
           f"{report.seconds:.1f} s; see {args.out}/batch.jsonl")
