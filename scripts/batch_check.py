@@ -134,45 +134,47 @@ def main() -> int:
     p.add_argument("--size", default="480x640")
     p.add_argument("--workers", type=int, default=os.cpu_count())
     p.add_argument("--seed", type=int, help="seed of the random kill moment")
-    p.add_argument("--skip-throughput", action="store_true")
+    p.add_argument("--skip-throughput", action="store_true", help="only the kill checks")
+    p.add_argument("--throughput-only", action="store_true", help="only the throughput runs")
     args = p.parse_args()
     rng = random.Random(args.seed)
     work = Path(args.work)
     clips = make_clips(work / "clips", args.clips, args.frames, args.size)
     n = len(clips)
 
-    # 1. local: kill -9 at a random moment, resume, check
-    out = work / "local_kill"
-    subprocess.run(["rm", "-rf", str(out)], check=True)
-    cmd = batch_cmd(work / "clips", out, "local", args.workers)
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL)
-    # somewhere in the first 70% of the batch's expected time (~0.35 s a frame here)
-    delay = rng.uniform(3.0, 0.7 * n * args.frames * 0.35 / args.workers)
-    time.sleep(delay)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    before = len(records(out))
-    partial = len(list((out / ".partial").glob("*"))) if (out / ".partial").exists() else 0
-    print(f"local: killed with SIGKILL after {delay:.1f} s: {before}/{n} recorded, "
-          f"{partial} partial outputs on disk")
-    t = run_timed(cmd)
-    print(f"local: resumed in {t:.1f} s; {check(out, clips, args.frames)}")
-
-    # 2. Ray: a worker killed mid-video
     have_ray = importlib.util.find_spec("ray") is not None
-    if not have_ray:
-        print("ray: not installed, skipped")
-    else:
-        out = work / "ray_kill"
+    if not args.throughput_only:
+        # 1. local: kill -9 at a random moment, resume, check
+        out = work / "local_kill"
         subprocess.run(["rm", "-rf", str(out)], check=True)
-        killed, stop = [], threading.Event()
-        killer = threading.Thread(target=kill_ray_worker, args=(killed, stop))
-        killer.start()
-        t = run_timed(batch_cmd(work / "clips", out, "ray", args.workers))
-        stop.set()
-        killer.join()
-        print(f"ray: {len(killed)} worker killed with SIGKILL mid-video; batch took {t:.1f} s; "
-              f"{check(out, clips, args.frames)}")
+        cmd = batch_cmd(work / "clips", out, "local", args.workers)
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL)
+        # somewhere in the first 70% of the batch's expected time (~0.35 s a frame here)
+        delay = rng.uniform(3.0, 0.7 * n * args.frames * 0.35 / args.workers)
+        time.sleep(delay)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        before = len(records(out))
+        partial = len(list((out / ".partial").glob("*"))) if (out / ".partial").exists() else 0
+        print(f"local: killed with SIGKILL after {delay:.1f} s: {before}/{n} recorded, "
+              f"{partial} partial outputs on disk")
+        t = run_timed(cmd)
+        print(f"local: resumed in {t:.1f} s; {check(out, clips, args.frames)}")
+
+        # 2. Ray: a worker killed mid-video
+        if not have_ray:
+            print("ray: not installed, skipped")
+        else:
+            out = work / "ray_kill"
+            subprocess.run(["rm", "-rf", str(out)], check=True)
+            killed, stop = [], threading.Event()
+            killer = threading.Thread(target=kill_ray_worker, args=(killed, stop))
+            killer.start()
+            t = run_timed(batch_cmd(work / "clips", out, "ray", args.workers))
+            stop.set()
+            killer.join()
+            print(f"ray: {len(killed)} worker killed with SIGKILL mid-video; batch took {t:.1f} s; "
+                  f"{check(out, clips, args.frames)}")
 
     if args.skip_throughput:
         return 0

@@ -10,6 +10,7 @@ import os
 import shutil
 import time
 import uuid
+from functools import partial
 from pathlib import Path
 from typing import Callable
 
@@ -73,12 +74,12 @@ def segment_job(source: str, name: str, out_dir: str, options: dict,
               "seconds": None, "error": None}
     try:
         tmp.parent.mkdir(parents=True, exist_ok=True)
-        args = _segment_args(options, source, tmp)
-        bar = (lambda **kw: _ReportingBar(name, report, **kw)) if report else None
         from motionbits.commands import segment
 
+        args = _segment_args(options, source, tmp)
+        progress = partial(_ReportingBar, name, report or (lambda *_: None))
         with contextlib.redirect_stdout(io.StringIO()):  # its summary line: the record says it
-            segment.run(args, **({"progress": bar} if bar else {}))
+            segment.run(args, progress=progress)
         frames = json.loads((tmp / "summary.json").read_text())["frames"]
         for attempt in range(2):  # an unrecorded earlier output is replaced
             if final.exists():

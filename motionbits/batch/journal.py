@@ -62,6 +62,6 @@ class Journal:
         self.records[rec["input"]] = rec
 
     def status(self, path: str) -> str | None:
-        """"done", "failed" or ``None`` (never finished) for an input path."""
+        """Status of an input path: "done", "failed", or ``None`` if never finished."""
         rec = self.records.get(path)
         return None if rec is None else rec["status"]
