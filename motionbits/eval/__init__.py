@@ -7,6 +7,7 @@ Public names:
     read_label_map / write_label_map                        16-bit PNG label maps
     evaluate_dataset(pred_dir, gt_dir)                      MoRiBo folders (see dataset.py)
     adjusted_rand_index(a, b)                               agreement of two partitions
+    scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
 """
 
 from motionbits.eval.agreement import adjusted_rand_index
@@ -15,6 +16,7 @@ from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 from motionbits.eval.overlap import contingency, overlap_scores
+from motionbits.eval.sequences import scenes_from_sequence
 
 __all__ = [
     "adjusted_rand_index",
@@ -31,4 +33,5 @@ __all__ = [
     "boundary_tolerance",
     "read_label_map",
     "write_label_map",
+    "scenes_from_sequence",
 ]

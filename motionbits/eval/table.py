@@ -9,8 +9,9 @@ import math
 __all__ = ["format_table", "json_ready"]
 
 _COLS = ("P", "R", "F1", "mIoU", "BP", "BR", "BF1")
-_LEGEND = ("sFP: static pixels (GT background, not ignored) inside a predicted object, % pooled "
-           "over the scenes; Spur: predicted objects matched to no GT object, mean per scene")
+_LEGEND = ("sFP: % of the static pixels (GT background, not ignored) inside a predicted object, "
+           "pooled over a track's scenes\nSpur: predicted objects matched to no GT object, mean "
+           "per scene (track averages: mean over tracks)")
 
 
 def _missing(v: float | None) -> bool:
@@ -52,7 +53,7 @@ def format_table(
     time_head = "  s/frame" if timing else ""
     lines = []
     group = (" " * (name_w + 2) + f"{'Overlap':^28}" + f"{'Boundary':^21}"
-             + " " * (7 if block == "pooled" else 0) + f"{'False pos.':^14}")
+             + " " * (7 if block == "pooled" else 0) + f"{'False pos.':^14}").rstrip()
     header = f"{'Method':<{name_w}}  " + "".join(f"{h:>7}" for h in heads) + time_head
     tracks: list[str] = []
     for res in results.values():
