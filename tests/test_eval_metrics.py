@@ -210,9 +210,12 @@ def test_label_values_do_not_matter_and_self_match_is_perfect(seed):
     perm = rng.permutation(1000)[: pred.max() + 1] + 1
     perm[0] = 0
     a, b = evaluate_frame(pred, gt), evaluate_frame(perm[pred], gt)
-    for name in ("iou", "precision", "recall", "f1", "bprecision", "brecall", "bf1"):
-        np.testing.assert_allclose(getattr(a, name), getattr(b, name))
-    assert a.pooled == pytest.approx(b.pooled)
+    huge = evaluate_frame(np.where(pred > 0, pred + (1 << 21), 0), gt)  # beyond lookup tables
+    for other in (b, huge):
+        for name in ("iou", "precision", "recall", "f1", "bprecision", "brecall", "bf1"):
+            np.testing.assert_allclose(getattr(a, name), getattr(other, name))
+        assert a.pooled == pytest.approx(other.pooled)
+        assert (a.static_fp_pixels, a.spurious) == (other.static_fp_pixels, other.spurious)
     s = evaluate_frame(gt, gt)
     assert s.f1.size == 0 or (s.f1.min() == 1.0 and s.bf1.min() == 1.0)
 

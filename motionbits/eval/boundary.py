@@ -49,20 +49,26 @@ def disk(radius: int) -> np.ndarray:
     return ((x * x + y * y) <= r * r).astype(np.uint8)
 
 
-def _neighbours(labels: np.ndarray, valid: np.ndarray | None) -> list[np.ndarray]:
-    """Labels of the E, S and SE neighbours; the pixel's own label where the neighbour is
-    outside the image or ignored (so that it never differs)."""
-    out = []
-    for dy, dx in ((0, 1), (1, 0), (1, 1)):
-        n = labels.copy()
-        h, w = labels.shape
-        n[: h - dy, : w - dx] = labels[dy:, dx:]
-        if valid is not None:
-            ok = np.zeros(labels.shape, bool)
-            ok[: h - dy, : w - dx] = valid[dy:, dx:]
-            n = np.where(ok, n, labels)
-        out.append(n)
+#: (dy, dx) of the neighbours a pixel is compared with: east, south, south-east.
+_STEPS = ((0, 1), (1, 0), (1, 1))
+
+
+def _differs(labels: np.ndarray, valid: np.ndarray | None, dy: int, dx: int) -> np.ndarray:
+    """(H - dy, W - dx) bool: pixel differs from its (dy, dx) neighbour, both valid."""
+    h, w = labels.shape
+    here, there = labels[: h - dy, : w - dx], labels[dy:, dx:]
+    out = here != there
+    if valid is not None:
+        out &= valid[: h - dy, : w - dx] & valid[dy:, dx:]
     return out
+
+
+def _edges(labels: np.ndarray, valid: np.ndarray | None) -> np.ndarray:
+    edge = np.zeros(labels.shape, dtype=bool)
+    h, w = labels.shape
+    for dy, dx in _STEPS:
+        edge[: h - dy, : w - dx] |= _differs(labels, valid, dy, dx)
+    return edge
 
 
 def boundary_map(labels: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
@@ -78,13 +84,7 @@ def boundary_map(labels: np.ndarray, valid: np.ndarray | None = None) -> np.ndar
         (H, W) bool boundary map (background pixels next to an object included).
     """
     lab = np.asarray(labels)
-    if lab.dtype == bool:
-        lab = lab.astype(np.uint8)
-    v = None if valid is None else np.asarray(valid, dtype=bool)
-    edge = np.zeros(lab.shape, dtype=bool)
-    for n in _neighbours(lab, v):
-        edge |= n != lab
-    return edge if v is None else edge & v
+    return _edges(lab, None if valid is None else np.asarray(valid, dtype=bool))
 
 
 def boundary_counts(index: np.ndarray, n: int, valid: np.ndarray | None = None) -> np.ndarray:
@@ -104,13 +104,17 @@ def boundary_counts(index: np.ndarray, n: int, valid: np.ndarray | None = None) 
     """
     idx = np.asarray(index, dtype=np.int64)
     v = None if valid is None else np.asarray(valid, dtype=bool)
-    nbrs = _neighbours(idx, v)
-    mixed = np.zeros(idx.shape, dtype=bool)
-    for nb in nbrs:
-        mixed |= nb != idx
-    if v is not None:
-        mixed &= v
-    block = np.sort(np.stack([idx[mixed]] + [nb[mixed] for nb in nbrs], axis=1), axis=1)
+    h, w = idx.shape
+    ys, xs = np.nonzero(_edges(idx, v))
+    own = idx[ys, xs]
+    block = [own]
+    for dy, dx in _STEPS:
+        # Out-of-image neighbours clamp to the pixel itself or to its E / S neighbour, whose
+        # label is in the block already; invalid ones take the pixel's own label.
+        ny, nx = np.minimum(ys + dy, h - 1), np.minimum(xs + dx, w - 1)
+        lab = idx[ny, nx]
+        block.append(lab if v is None else np.where(v[ny, nx], lab, own))
+    block = np.sort(np.stack(block, axis=1), axis=1)
     first = np.ones(block.shape, dtype=bool)
     first[:, 1:] = block[:, 1:] != block[:, :-1]  # each distinct label of a block once
     return np.bincount(block[first], minlength=n + 1)[1 : n + 1].astype(np.int64)

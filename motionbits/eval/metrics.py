@@ -62,6 +62,8 @@ __all__ = ["FrameScores", "evaluate_frame", "summarize", "METRIC_KEYS", "INSTANC
 METRIC_KEYS = ("P", "R", "F1", "mIoU", "BP", "BR", "BF1", "pct75")
 #: Keys of the false-positive block (see the module docstring, step 7).
 FP_KEYS = ("static_fp", "static_fp_scene", "spurious")
+#: Label maps with labels below this are indexed with a lookup table, larger ones by a sort.
+_LUT_MAX = 1 << 20
 #: Overlap F1 threshold of the %75 figure.
 F75 = 0.75
 #: Per-instance arrays of :class:`FrameScores` behind the macro keys.
@@ -239,14 +241,18 @@ def evaluate_frame(
 
 def _index_map(labels: np.ndarray, ids: np.ndarray, keep: np.ndarray | None) -> np.ndarray:
     """(H, W) int64 compact index (1..K for ``ids``, 0 elsewhere and at ignored pixels)."""
-    out = np.zeros(labels.shape, np.int64)
-    if ids.size:
-        pos = np.searchsorted(ids, labels)
-        pos = np.minimum(pos, ids.size - 1)
-        hit = (ids[pos] == labels) & (labels > 0)
-        if keep is not None:
-            hit &= keep
-        out[hit] = pos[hit] + 1
+    if not ids.size:
+        return np.zeros(labels.shape, np.int64)
+    top = int(labels.max())
+    if top < _LUT_MAX:
+        lut = np.zeros(top + 1, np.int64)
+        lut[ids] = np.arange(1, ids.size + 1)
+        out = lut[labels]
+    else:
+        pos = np.minimum(np.searchsorted(ids, labels), ids.size - 1)
+        out = np.where((ids[pos] == labels) & (labels > 0), pos + 1, 0)
+    if keep is not None:
+        out[~keep] = 0
     return out
 
 
