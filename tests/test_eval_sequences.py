@@ -60,11 +60,22 @@ def test_resize_and_several_objects(tmp_path):
     assert res["macro"]["mIoU"] == 1.0 and res["false_positives"]["static_fp"] == 0.0
 
 
+def test_davis_release_layout(tmp_path):
+    seq = make_sequence(tmp_path / "tmp" / "bear", n=5, values=(1, 2))
+    root = tmp_path / "DAVIS"
+    (root / "JPEGImages" / "480p").mkdir(parents=True)
+    (root / "Annotations" / "480p").mkdir(parents=True)
+    (seq / "frames").rename(root / "JPEGImages" / "480p" / "bear")
+    (seq / "gt").rename(root / "Annotations" / "480p" / "bear")
+    (scene,) = scenes_from_sequence(root / "JPEGImages" / "480p" / "bear", tmp_path / "out", length=5)
+    assert scene.name == "bear_00000" and read_label_map(scene / "gt.png").max() == 2
+
+
 def test_bad_input(tmp_path):
     with pytest.raises(FileNotFoundError, match="not found"):
         scenes_from_sequence(tmp_path / "nope", tmp_path / "out")
     (tmp_path / "empty" / "frames").mkdir(parents=True)
-    with pytest.raises(FileNotFoundError, match="gt/"):
+    with pytest.raises(FileNotFoundError, match="no sequence"):
         scenes_from_sequence(tmp_path / "empty", tmp_path / "out")
     src = make_sequence(tmp_path / "short", n=4)
     with pytest.raises(ValueError, match="fewer than"):

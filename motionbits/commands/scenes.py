@@ -12,8 +12,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "scenes",
         help="cut an annotated sequence (DAVIS style) into MoRiBo-format scenes",
         description=(
-            "Cut a DAVIS-style sequence (SRC/frames/ or JPEGImages/, SRC/gt/ or Annotations/ "
-            "with one mask per frame; 0 = background) into windows of --length frames every "
+            "Cut a DAVIS-style sequence (SRC/frames/ and SRC/gt/ with one mask per frame, 0 = "
+            "background; or a DAVIS JPEGImages/480p/<seq> folder, masks from the matching "
+            "Annotations/480p/<seq>) into windows of --length frames every "
             "--stride frames. Each window becomes a scene OUT/<name>_<first frame>/ with frames/, "
             "gt.png (the window's last mask, objects relabelled 1..K) and meta.json, so that "
             "'motionbits benchmark --data OUT' scores it."

@@ -1,7 +1,8 @@
 """Cut a DAVIS-style annotated sequence into MoRiBo-format scenes (short windows).
 
-A DAVIS-style sequence is a folder with ``frames/`` (or DAVIS's ``JPEGImages/``) holding the
-frames and ``gt/`` (or ``Annotations/``) holding one mask per frame with the same file stem:
+A DAVIS-style sequence is a folder with ``frames/`` holding the frames and ``gt/`` holding
+one mask per frame with the same file stem, or a sequence folder of the DAVIS release
+(``<root>/JPEGImages/480p/<seq>``, masks in ``<root>/Annotations/480p/<seq>``). Masks are
 8-bit or palette PNGs where 0 is background and every other value one object (DAVIS 2016:
 255 = the object; DAVIS 2017: palette indices 1..K). Each window of ``length`` frames
 becomes a scene whose ``gt.png`` is the window's last mask, the objects relabelled 1..K in
@@ -25,12 +26,18 @@ __all__ = ["scenes_from_sequence"]
 _IMG = (".jpg", ".jpeg", ".png", ".bmp")
 
 
-def _subdir(src: Path, names: tuple[str, ...]) -> Path:
-    for name in names:
-        if (src / name).is_dir():
-            return src / name
-    raise FileNotFoundError(f"{src} has no {' or '.join(n + '/' for n in names)} folder "
-                            "(a DAVIS-style sequence: frames/ and gt/ with matching file names)")
+def _folders(src: Path) -> tuple[Path, Path]:
+    """(frame folder, mask folder) of a sequence (module docstring)."""
+    if (src / "frames").is_dir() and (src / "gt").is_dir():
+        return src / "frames", src / "gt"
+    parts = src.resolve().parts
+    if "JPEGImages" in parts:
+        i = len(parts) - 1 - parts[::-1].index("JPEGImages")
+        masks = Path(*parts[:i], "Annotations", *parts[i + 1 :])
+        if masks.is_dir():
+            return src, masks
+    raise FileNotFoundError(f"{src} is no sequence: it needs frames/ and gt/ folders (or is a "
+                            "DAVIS JPEGImages/<res>/<seq> folder with matching Annotations/)")
 
 
 def scenes_from_sequence(
@@ -45,8 +52,9 @@ def scenes_from_sequence(
     """Write the windows ``[s, s + length)``, s = 0, stride, ... of a sequence as scenes.
 
     Args:
-        src: sequence folder with ``frames/`` and ``gt/`` (or ``JPEGImages/`` and
-            ``Annotations/``); the last frame of every window needs a mask with its stem.
+        src: sequence folder with ``frames/`` and ``gt/``, or a DAVIS
+            ``JPEGImages/<res>/<seq>`` folder; the last frame of every window needs a mask
+            with its stem.
         out: output folder (a MoRiBo track); scenes go to ``out/<name>_<first frame>``.
         length: frames per scene (>= 2); only full windows are written.
         stride: step between window starts (>= 1).
@@ -69,8 +77,7 @@ def scenes_from_sequence(
     src, out = Path(src), Path(out)
     if not src.is_dir():
         raise FileNotFoundError(f"sequence folder not found: {src}")
-    frame_dir = _subdir(src, ("frames", "JPEGImages"))
-    gt_dir = _subdir(src, ("gt", "Annotations"))
+    frame_dir, gt_dir = _folders(src)
     frames = sorted(p for p in frame_dir.iterdir() if p.suffix.lower() in _IMG)
     if len(frames) < length:
         raise ValueError(f"{frame_dir} holds {len(frames)} frames, fewer than --length {length}")
