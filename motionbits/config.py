@@ -85,7 +85,6 @@ class MotionBitsConfig:
     # ours: a pixel's flow residual counts fully where its image gradient reaches this many
     # grey levels per px, proportionally less on flatter pixels (their flow is interpolated)
     flow_texture: float = 4.0
-    move_cost: float = 0.15  # px: mask cost of any MotionBit over the background (ties -> static)
     # ours: a pixel's carried MotionBit label is credited (prior_bonus) only where the
     # MotionBit's motion once explained that pixel better than "static" by this many grey
     # levels (3x3 mean) -- a label smeared onto a flat static region does not persist
@@ -128,7 +127,6 @@ class MotionBitsConfig:
             "prior_bonus": self.prior_bonus >= 0,
             "photo_weight": self.photo_weight >= 0,
             "flow_texture": self.flow_texture > 0,
-            "move_cost": self.move_cost >= 0,
             "pixel_evidence": self.pixel_evidence >= 0,
             "match_iou": 0.0 <= self.match_iou <= 1.0,
             "merge_agree": self.merge_agree >= 0,

@@ -322,7 +322,7 @@ class MotionBitsSegmenter:
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
-                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight, move_cost=cfg.move_cost,
+                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(2 * cw * ch)))
@@ -331,8 +331,12 @@ class MotionBitsSegmenter:
             moving = self._record_motion(node_ids, ids, thetas, trans, pts)
             own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
             reach = int(np.ceil(max(grid.cell)))
+            # born out of pixels that were in view and had never been in a MotionBit
+            margin = 2 * max(grid.cell)
+            in_view = np.all((seen_pts >= margin) & (seen_pts < np.array(
+                [grid.width, grid.height]) - margin), axis=1)
             born = {int(i) for i in ids[ids >= first_new]
-                    if np.mean(hist_nodes[node_ids == i] == 0) > 0.5}
+                    if np.mean((hist_nodes == 0) & in_view, where=node_ids == i) > 0.5}
             for a, b in touching_pairs(labels, reach=reach):
                 if self._groups.known(a, b):
                     continue
