@@ -168,6 +168,11 @@ class MotionBitsSegmenter:
         return MotionBitsResult(self.frame_index, np.zeros((h, w), np.int32), [],
                                 np.zeros((g.rows, g.cols), np.int32), dict(self._timings))
 
+    @property
+    def backend(self) -> str:
+        """Where the heavy steps run: ``"numpy"`` or ``"torch:<device>"`` (resolved)."""
+        return self._ops.name
+
     def __call__(self, frames: FrameSource) -> list[np.ndarray]:
         """Segment one whole video from its first frame: one (H, W) int32 label map per
         frame (the ``frames -> label maps`` interface of ``somprompt.GroundedVQA``).
