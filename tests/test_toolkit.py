@@ -187,6 +187,8 @@ def test_config_file_toml_json_and_errors(tmp_path):
 def test_python_m_motionbits_is_the_cli():
     run = subprocess.run([sys.executable, "-m", "motionbits", "--help"], capture_output=True, text=True)
     assert run.returncode == 0 and "segment" in run.stdout and "usage: motionbits" in run.stdout
+    # `bench` and `benchmark`: the help says at once which is which
+    assert "SPEED of the segmenter" in run.stdout and "ACCURACY of methods" in run.stdout
 
 
 def test_summary_reproduces_the_run(clip_mp4, tmp_path):

@@ -367,7 +367,7 @@ class YOLOEGrounder(TextGrounder):
     """`TextGrounder` over YOLOE: the paper's VLM-text -> masks translation.
 
     Example:
-        >>> grounder = YOLOEGrounder.from_pretrained("weights/yoloe-11l-seg.pt",
+        >>> grounder = YOLOEGrounder.from_pretrained("weights/yoloe-11l-seg.pt",  # doctest: +SKIP
         ...                                          text_encoder="weights/mobileclip_blt.ts")
         >>> labels = grounder.ground("- red block: the cube that slid", final_frame)  # doctest: +SKIP
         >>> labels.shape, labels.dtype  # doctest: +SKIP
