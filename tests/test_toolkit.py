@@ -72,6 +72,16 @@ def test_readme_snippet_segmenter_plugs_into_grounded_vqa(clip_mp4):
     assert obj.id == first and obj.area == int(mask.sum())
 
 
+def test_grounded_vqa_reads_a_folder_of_images(clip, tmp_path):
+    from somprompt.testing import FixedSegmenter
+
+    for i, frame in enumerate(clip.frames):
+        cv2.imwrite(str(tmp_path / f"{i:05d}.png"), cv2.cvtColor(frame, cv2.COLOR_RGB2BGR))
+    res = GroundedVQA(FixedSegmenter(clip.labels), StubVLM("[1]"))(str(tmp_path), question="?")
+    assert all(np.array_equal(a, b) for a, b in zip(res.frames, clip.frames))
+    assert np.array_equal(res.masks[res.cited_ids[0]], clip.labels[-1] == res.cited_ids[0])
+
+
 def test_segmenter_call_starts_a_new_video_each_time(clip):
     seg = MotionBitsSegmenter(SMALL)
     a = seg(clip.frames)
@@ -96,6 +106,7 @@ def test_label_map_instances_round_trip():
     assert np.array_equal(labels_from_instances(objs, labels.shape), labels)
 
 
+@pytest.mark.filterwarnings("ignore:__array__ implementation:DeprecationWarning")  # inside pycocotools, numpy 2
 def test_coco_rle_round_trip_and_json():
     pycocotools_mask = pytest.importorskip("pycocotools.mask")
     rng = np.random.default_rng(0)
