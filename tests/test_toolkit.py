@@ -148,6 +148,13 @@ def test_motionbits_result_and_detections_give_the_same_type(clip):
         assert obj.area == int(obj.get_mask().sum()) and obj.first_moved <= obj.last_moved
     with pytest.raises(ValueError, match="no mask"):
         result.motionbits[0].get_mask()
+    sv = pytest.importorskip("supervision")
+    det = to_supervision(objs)
+    assert det.data["twist"].shape == (len(objs), 3)
+    back = from_supervision(det)
+    np.testing.assert_allclose([o.twist for o in back], [o.twist for o in objs])
+    drawn = sv.MaskAnnotator(color_lookup=sv.ColorLookup.TRACK).annotate(clip.frames[-1].copy(), det)
+    assert not np.array_equal(drawn, clip.frames[-1])
     det = Detections(np.stack([result.labels == i for i in result.ids]), np.linspace(0.9, 0.5, len(result.ids)),
                      [f"body {i}" for i in result.ids])
     from_det = det.instances()
