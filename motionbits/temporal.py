@@ -59,25 +59,28 @@ class TemporalState:
         """Index of the copy the constraints read (the one covering the most frames)."""
         return int(np.argmax(self.covered))
 
-    def carry(self, labels: np.ndarray, flow_back: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Carry the last label map and every history copy to the current frame.
+    def carry(self, maps: list[np.ndarray], flow_back: np.ndarray
+              ) -> tuple[list[np.ndarray], np.ndarray]:
+        """Carry every history copy, and ``maps`` along with them, to the current frame.
 
         Args:
-            labels: (h, w) int32 label map of the previous frame.
+            maps: (h, w) int32 maps of the previous frame to carry too (the label map...),
+                in the same remap calls.
             flow_back: (h, w, 2) flow from the current frame to the previous one.
 
         Returns:
-            (prior, history): the carried label map and the carried history the constraints
-            read, both (h, w) int32. The copies are kept carried for :meth:`fold`.
+            (carried maps, history): ``maps`` carried, and the carried history the
+            constraints read, (h, w) int32. The copies are kept carried for :meth:`fold`.
         """
-        maps = [labels, *self.histories]
+        stack = [*maps, *self.histories]
         carried = []
-        for start in range(0, len(maps), 4):  # OpenCV remaps at most 4 channels at once
-            chunk = warp_nearest(np.dstack(maps[start:start + 4]), flow_back)
+        for start in range(0, len(stack), 4):  # OpenCV remaps at most 4 channels at once
+            chunk = warp_nearest(np.dstack(stack[start:start + 4]), flow_back)
             carried.append(chunk.reshape(chunk.shape[:2] + (-1,)))
         carried = np.concatenate(carried, axis=2)
-        self.histories = np.ascontiguousarray(np.moveaxis(carried[..., 1:], 2, 0))
-        return carried[..., 0], self.histories[self.oldest]
+        m = len(maps)
+        self.histories = np.ascontiguousarray(np.moveaxis(carried[..., m:], 2, 0))
+        return [carried[..., i] for i in range(m)], self.histories[self.oldest]
 
     def project(self, project: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
         """Move the past edge maxima onto the current graph.

@@ -33,7 +33,8 @@ def run(state: TemporalState, n_apart: int, n_together: int, raw_apart=5.0, raw_
     prev = np.zeros((H, W), np.int32)
     for t in range(n_apart + n_together):
         lab, raw = (labels_apart(), raw_apart) if t < n_apart else (labels_together(), raw_together)
-        _, hist = state.carry(prev, STILL)
+        (carried,), hist = state.carry([prev], STILL)
+        assert np.array_equal(carried, prev)  # no motion: carried unchanged
         past = state.project(lambda pm: pm)
         out.append((hist[10, 10], hist[10, 30], past[0, 0], state.covered[state.oldest]))
         state.fold(np.full((4, 2), raw), lab, margin=1)

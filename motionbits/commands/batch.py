@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motionbits.commands.segment import add_video_options
+from motionbits.commands.segment import add_video_options, config_from_args
 
 __all__ = ["register", "run"]
 
@@ -51,7 +51,6 @@ def register(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from motionbits.batch import expand_inputs, run_batch
-    from motionbits.config import MotionBitsConfig
 
     if args.address and args.engine != "ray":
         raise ValueError("--address needs --engine ray")
@@ -59,8 +58,7 @@ def run(args: argparse.Namespace) -> int:
            "command"}
     options = {k: v for k, v in vars(args).items() if k not in own}
     # bad option values fail here, once, rather than in every video
-    MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend,
-                     window=args.window)
+    config_from_args(args)
     items = expand_inputs(args.inputs)
     try:
         report = run_batch(items, args.out, options, engine=args.engine, workers=args.workers,
