@@ -25,8 +25,23 @@ def segment_video_task(item: BatchInput, out_dir: str, options: dict, progress) 
 
     cv2.setNumThreads(1)  # the task holds one CPU
     with threadpool_limits(1):
+        # fire and forget: a task blocked in ray.get would lend its CPU to another task
         return segment_job(item.path, item.name, out_dir, options,
-                           report=lambda *msg: progress.put(msg))
+                           report=lambda *msg: progress.put.remote(msg))
+
+
+class _Progress:
+    """Actor collecting (name, frames done, frames in total) from the tasks."""
+
+    def __init__(self):
+        self.items: list[tuple] = []
+
+    def put(self, msg: tuple) -> None:
+        self.items.append(msg)
+
+    def take(self) -> list[tuple]:
+        items, self.items = self.items, []
+        return items
 
 
 def run_ray(items: Iterable[BatchInput], out_dir: str, options: dict, *, address: str | None,
@@ -42,7 +57,6 @@ def run_ray(items: Iterable[BatchInput], out_dir: str, options: dict, *, address
     """
     try:
         import ray
-        from ray.util.queue import Empty, Queue
     except ImportError:
         raise ImportError("--engine ray needs Ray: pip install 'motionbits[ray]'") from None
 
@@ -51,16 +65,13 @@ def run_ray(items: Iterable[BatchInput], out_dir: str, options: dict, *, address
         kwargs = {"address": address} if address else {"num_cpus": workers}
         ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
     try:
-        progress = Queue()
+        progress = ray.remote(num_cpus=0)(_Progress).remote()
         task = ray.remote(num_cpus=1, max_retries=TASK_RETRIES)(segment_video_task)
         refs = {task.remote(item, out_dir, options, progress): item for item in items}
 
         def drain() -> None:
-            try:
-                for msg in progress.get_nowait_batch(progress.qsize()):
-                    on_progress(*msg)
-            except Empty:
-                pass
+            for msg in ray.get(progress.take.remote()):
+                on_progress(*msg)
 
         while refs:
             done, _ = ray.wait(list(refs), num_returns=1, timeout=0.25)
