@@ -18,8 +18,11 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
             "Needs: pip install motionbits[sim]."
         ),
     )
-    p.add_argument("--track", choices=("robot", "hand"), action="append", required=True,
-                   help="track to generate (repeat for both)")
+    p.add_argument("--track", choices=("robot", "hand", "pickplace"), action="append",
+                   required=True,
+                   help="track to generate (repeat for several): robot, hand (pushes), pickplace "
+                        "(harder: natural textures, shadows, an articulated hand or gripper "
+                        "carries a block across the table while other bodies move)")
     p.add_argument("--scenes", type=int, default=40, metavar="N", help="scenes per track (40)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (0)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (DIR/<track>/...)")

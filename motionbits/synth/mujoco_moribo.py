@@ -83,7 +83,7 @@ def _meta(clip: SimulatedClip, plan: ScenePlan, track: str, seed: int, index: in
             "pixels": int(np.count_nonzero(clip.gt == lab)),
         }
     ignored = [clip.body_names[r] for r in range(len(clip.body_names))
-               if STATIC_M <= clip.deviation[r] < MOVED_M]
+               if STATIC_M <= clip.deviation[r] < MOVED_M or r in clip.info.get("agent_roots", ())]
     return {
         "format": "MoRiBo", "generator": "motionbits.synth.mujoco", "version": GENERATOR_VERSION,
         "mujoco": mj_version, "track": track, "seed": int(seed), "index": int(index),
@@ -98,7 +98,26 @@ def _meta(clip: SimulatedClip, plan: ScenePlan, track: str, seed: int, index: in
         "parts": [{"name": n, "kind": k} for n, k in plan.parts],
         "gt_definition": "last-frame pixels of every rigid body (geom -> body -> body_weldid) "
                          "whose max deviation over the clip >= thresholds_m.moved",
+        **_script_meta(plan),
     }
+
+
+def _script_meta(plan: ScenePlan) -> dict:
+    """The choreography of a scripted scene, in meta.json terms (empty for plain pushes)."""
+    if plan.script is None:
+        return {}
+
+    def r(v):
+        return [round(float(x), 4) for x in np.ravel(v)]
+
+    return {"agents_ignored": True, "script": {
+        "agents": [{"body": a.body, "times": r(a.times), "positions": [r(p) for p in a.positions],
+                    "yaws": r(a.yaws), "grips": r(a.grips)} for a in plan.script.agents],
+        "carries": [{"agent": c.agent, "body": c.body, "t_grasp": round(c.t_grasp, 4),
+                     "t_release": round(c.t_release, 4)} for c in plan.script.carries],
+        "kicks": [{"body": k.body, "t": round(k.t, 4), "velocity": r(k.velocity)}
+                  for k in plan.script.kicks],
+    }}
 
 
 def write_scene(folder: str | os.PathLike, clip: SimulatedClip, meta: dict) -> Path:
