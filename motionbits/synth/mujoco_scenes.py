@@ -57,6 +57,7 @@ class ScenePlan:
             mocap body ``pusher`` from ``start`` to ``end`` (robot and hand tracks).
         assets: file name -> bytes of textures the MJCF refers to.
         max_travel: a body moving farther than this (m) makes the clip implausible.
+        cameras: one camera per frame (a moving camera); ``None`` = ``camera`` throughout.
     """
 
     track: str
@@ -73,6 +74,7 @@ class ScenePlan:
     script: Choreography | None = None
     assets: dict[str, bytes] = field(default_factory=dict)
     max_travel: float = 0.35
+    cameras: tuple[Camera, ...] | None = None
 
 
 def _place(rng: np.random.Generator, parts: list[Part], radius: float,

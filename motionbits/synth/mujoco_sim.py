@@ -27,6 +27,7 @@ from motionbits.synth.mujoco_agents import AGENT_PREFIX
 from motionbits.synth.mujoco_backend import import_mujoco
 from motionbits.synth.mujoco_choreo import ChoreoDriver
 from motionbits.synth.mujoco_scenes import ScenePlan
+from motionbits.synth.scene_flow import FrameGeometry, gl_camera
 
 __all__ = ["SimulatedClip", "simulate", "agent_roots", "MOVED_M", "STATIC_M", "SETTLE_S"]
 
@@ -53,6 +54,9 @@ class SimulatedClip:
         body_names: name of every body.
         valid: False if the simulation blew up or something fell off the table.
         info: extra facts for meta.json.
+        geometry: per frame depth, geom ids, body poses and camera (``record_geometry``).
+        geom_body: (ngeom,) int32 body of every geom (``model.geom_bodyid``).
+        body_root: (nbody,) int32 rigid-body root of every body (``model.body_weldid``).
     """
 
     frames: np.ndarray
@@ -65,6 +69,22 @@ class SimulatedClip:
     body_names: list[str]
     valid: bool
     info: dict = field(default_factory=dict)
+    geometry: list[FrameGeometry] | None = None
+    geom_body: np.ndarray | None = None
+    body_root: np.ndarray | None = None
+
+
+def _frame_geometry(mujoco, renderer, data, width: int, height: int) -> FrameGeometry:
+    """Depth, geom ids, body poses and camera of the scene last passed to ``update_scene``."""
+    camera = gl_camera(renderer.scene.camera[0], width, height)
+    renderer.enable_depth_rendering()
+    depth = renderer.render().astype(np.float32)
+    renderer.enable_segmentation_rendering()
+    seg = renderer.render()
+    renderer.disable_segmentation_rendering()
+    geom_ids = np.where(seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM), seg[..., 0], -1)
+    return FrameGeometry(depth, geom_ids.astype(np.int32), data.xpos.copy(),
+                         data.xmat.reshape(-1, 3, 3).copy(), camera)
 
 
 def agent_roots(model) -> set[int]:
@@ -98,14 +118,21 @@ def _root_corners(mujoco, model, data) -> dict[int, tuple[np.ndarray, np.ndarray
     return {r: np.concatenate(c) for r, c in roots.items()}
 
 
+def _set_camera(cam, c) -> None:
+    cam.lookat[:] = c.lookat
+    cam.distance, cam.azimuth, cam.elevation = c.distance, c.azimuth, c.elevation
+
+
 def simulate(plan: ScenePlan, *, width: int = 640, height: int = 480,
-             n_frames: int | None = None) -> SimulatedClip:
+             n_frames: int | None = None, record_geometry: bool = False) -> SimulatedClip:
     """Settle the scene, move the pusher along its plan, render every frame.
 
     Args:
         plan: from :func:`compose_scene`.
         width, height: render size.
         n_frames: override the plan's clip length (tests use short clips).
+        record_geometry: also render depth and geom ids of every frame and keep the body
+            poses and camera (``clip.geometry``, for the exact flow).
     """
     mujoco = import_mujoco()
     model = mujoco.MjModel.from_xml_string(plan.xml, plan.assets or None)
@@ -131,9 +158,7 @@ def simulate(plan: ScenePlan, *, width: int = 640, height: int = 480,
     T = int(n_frames or plan.n_frames)
     cam = mujoco.MjvCamera()
     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-    cam.lookat[:] = plan.camera.lookat
-    cam.distance, cam.azimuth, cam.elevation = (plan.camera.distance, plan.camera.azimuth,
-                                                plan.camera.elevation)
+    _set_camera(cam, plan.camera)
     corners = _root_corners(mujoco, model, data)
     roots = sorted(corners)
     x0 = {r: data.xpos[r].copy() for r in roots}
@@ -145,6 +170,7 @@ def simulate(plan: ScenePlan, *, width: int = 640, height: int = 480,
     # A script written for plan.n_frames frames plays whole in a shorter or longer clip.
     script_rate = (plan.n_frames - 1) / max(T - 1, 1)
     valid = True
+    geometry: list[FrameGeometry] = []
     renderer = mujoco.Renderer(model, height, width)
     try:
         for k in range(T):
@@ -165,8 +191,12 @@ def simulate(plan: ScenePlan, *, width: int = 640, height: int = 480,
             for r in roots:
                 now = corners[r] @ data.xmat[r].reshape(3, 3).T + data.xpos[r]
                 deviation[r] = max(deviation[r], float(np.linalg.norm(now - start_w[r], axis=1).max()))
+            if plan.cameras is not None:  # a moving camera; a script's time scale
+                _set_camera(cam, plan.cameras[min(int(round(k * script_rate)), len(plan.cameras) - 1)])
             renderer.update_scene(data, camera=cam)
             frames[k] = renderer.render()
+            if record_geometry:
+                geometry.append(_frame_geometry(mujoco, renderer, data, width, height))
         renderer.enable_segmentation_rendering()
         renderer.update_scene(data, camera=cam)
         seg = renderer.render()
@@ -202,7 +232,8 @@ def simulate(plan: ScenePlan, *, width: int = 640, height: int = 480,
     return SimulatedClip(
         frames=frames, gt=gt.astype(np.int32), ignore=ignore, geom_ids=geom_ids,
         root_of_geom=root_of_geom, deviation=deviation, label_of_root=label_of_root,
-        body_names=names, valid=valid,
+        body_names=names, valid=valid, geometry=geometry or None,
+        geom_body=model.geom_bodyid.astype(np.int32), body_root=model.body_weldid.astype(np.int32),
         info={"sim_steps_per_frame": steps, "timestep": float(model.opt.timestep),
               "agent_roots": sorted(agents)},
     )
