@@ -29,6 +29,14 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--size", default="640x480", metavar="WxH", help="frame size (640x480)")
     p.add_argument("--frames", type=int, default=None, metavar="T",
                    help="frames per clip (default: random 12-16 per scene)")
+    p.add_argument("--camera", default="static",
+                   choices=("static", "pan", "orbit", "shake", "moving"),
+                   help="camera motion (static): pan turns in place, orbit circles the table "
+                        "(parallax), shake is hand-held jitter, moving draws one of the three "
+                        "per scene; a moving camera writes to DIR/<track>-<camera>/")
+    p.add_argument("--flow", action="store_true",
+                   help="also write the exact optical flow of every frame pair, both "
+                        "directions, with visibility masks (flow/NNNNN.npz; see docs/evaluation.md)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
     return p
@@ -54,5 +62,6 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--frames must be at least 2")
     for track in dict.fromkeys(args.track):
         generate_track(track, args.scenes, args.seed, args.out, width=w, height=h,
-                       n_frames=args.frames, progress=not args.quiet)
+                       n_frames=args.frames, progress=not args.quiet, camera=args.camera,
+                       flow=args.flow)
     return 0

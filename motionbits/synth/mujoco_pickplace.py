@@ -67,13 +67,14 @@ def _pick_and_place(rng, agent: AgentSpec, target: Part, place: np.ndarray,
     lift = float(rng.uniform(0.16, 0.24)) + target.height
     tgt = np.array([target.xy[0], target.xy[1], grasp_z])
     dst = np.array([place[0], place[1], grasp_z + 0.003])
-    start = tgt + away * rng.uniform(0.5, 0.7) + np.array([0, 0, rng.uniform(0.15, 0.3)])
+    start = tgt + away * rng.uniform(0.4, 0.6) + np.array([0, 0, rng.uniform(0.15, 0.3)])
     leave_dir = rng.uniform(0, 2 * np.pi)
     leave = dst + np.array([np.cos(leave_dir) * 0.45, np.sin(leave_dir) * 0.45, 0.3])
     t = [0.0]
-    for dt in (rng.uniform(2.2, 3.2), rng.uniform(1.0, 1.6), rng.uniform(0.7, 1.0),
-               rng.uniform(1.0, 1.6), rng.uniform(2.4, 3.4), rng.uniform(1.0, 1.5),
-               rng.uniform(0.7, 1.0)):
+    # approach, descend, close, lift, carry, set down, open (frames); then leave
+    for dt in (rng.uniform(1.8, 2.6), rng.uniform(0.8, 1.2), rng.uniform(0.6, 0.8),
+               rng.uniform(0.8, 1.2), rng.uniform(3.8, 5.0), rng.uniform(0.8, 1.2),
+               rng.uniform(0.5, 0.8)):
         t.append(t[-1] + dt)
     t.append(float(N_FRAMES - 1))
     pos = np.array([start, tgt + [0, 0, hover], tgt, tgt, tgt + [0, 0, lift],
@@ -140,7 +141,7 @@ def compose_pickplace(rng: np.random.Generator, *, width: int = 640, height: int
     place = None
     for _ in range(200):
         xy = _place(rng, [p for p in s.parts if p is not target], target.radius + 0.02, inner, tries=1)
-        if xy is not None and 0.25 <= np.linalg.norm(xy - target.xy) <= 0.55:
+        if xy is not None and 0.2 <= np.linalg.norm(xy - target.xy) <= 0.45:
             place = xy
             break
     if place is None:
