@@ -6,10 +6,10 @@ a :class:`~motionbits.synth.mujoco_choreo.Choreography`:
 * a table of wood, marble, fabric or granite; natural or builtin textures on 4-7 free
   objects (blocks, glued composites, balls) and 0-2 static distractors; every light casts
   shadows;
-* the main agent (an articulated hand or a parallel gripper) enters from any side, more
-  than half a metre away, grasps a block, lifts it, carries it 25-55 cm across the table
-  (peak speed 4-9 cm per frame, i.e. 20-50 px at 480x640), turns it, sets it down and
-  leaves;
+* the main agent (an articulated hand or a parallel gripper) enters from any side, 30-45
+  cm away, grasps a block, lifts it 10-15 cm in 1.4-1.8 frames, carries it 12-28 cm
+  across the table in 4.2-5 frames (peaks of up to 10 cm per frame, tens of pixels at
+  480x640), turns it, sets it down and leaves;
 * with probability 0.8 a second agent (a rigid hand) sweeps another object 20-40 cm at
   the same time; with probability 0.5 a ball is kicked and rolls (or a block slides); at
   least one of the two happens.
@@ -64,17 +64,17 @@ def _pick_and_place(rng, agent: AgentSpec, target: Part, place: np.ndarray,
     yaw1 = yaw0 + float(rng.uniform(-0.9, 0.9))
     grasp_z = max(0.006, 0.35 * target.height) if agent.kind == "hand" else max(0.005, 0.25 * target.height)
     hover = rest_z + target.height + 0.06
-    lift = float(rng.uniform(0.16, 0.24)) + target.height
+    lift = float(rng.uniform(0.1, 0.15)) + target.height
     tgt = np.array([target.xy[0], target.xy[1], grasp_z])
     dst = np.array([place[0], place[1], grasp_z + 0.003])
-    start = tgt + away * rng.uniform(0.4, 0.6) + np.array([0, 0, rng.uniform(0.15, 0.3)])
+    start = tgt + away * rng.uniform(0.3, 0.45) + np.array([0, 0, rng.uniform(0.12, 0.22)])
     leave_dir = rng.uniform(0, 2 * np.pi)
-    leave = dst + np.array([np.cos(leave_dir) * 0.45, np.sin(leave_dir) * 0.45, 0.3])
+    leave = dst + np.array([np.cos(leave_dir) * 0.15, np.sin(leave_dir) * 0.15, 0.12])
     t = [0.0]
     # approach, descend, close, lift, carry, set down, open (frames); then leave
-    for dt in (rng.uniform(1.8, 2.6), rng.uniform(0.8, 1.2), rng.uniform(0.6, 0.8),
-               rng.uniform(0.8, 1.2), rng.uniform(3.8, 5.0), rng.uniform(0.8, 1.2),
-               rng.uniform(0.5, 0.8)):
+    for dt in (rng.uniform(2.4, 3.2), rng.uniform(0.8, 1.1), rng.uniform(0.5, 0.7),
+               rng.uniform(1.4, 1.8), rng.uniform(4.2, 5.0), rng.uniform(1.4, 1.8),
+               rng.uniform(0.5, 0.7)):
         t.append(t[-1] + dt)
     t.append(float(N_FRAMES - 1))
     pos = np.array([start, tgt + [0, 0, hover], tgt, tgt, tgt + [0, 0, lift],
@@ -95,11 +95,11 @@ def _sweep(rng, agent: AgentSpec, part: Part, dist: float, t0: float, t1: float,
     start = contact - d * rng.uniform(0.04, 0.08)
     end = contact + d * dist
     yaw = float(np.arctan2(d[1], d[0]) - np.pi / 2)
-    above = np.array([0, 0, 0.25])
+    above = np.array([0, 0, 0.15])
     times = (0.0, t0, t1, min(t1 + 2.0, N_FRAMES - 1.0))
     if times[-1] <= times[-2]:
         times = (0.0, t0, t1, t1 + 1.0)
-    pos = np.array([start + above - d * 0.2, start, end, end + above * 0.8])
+    pos = np.array([start + above - d * 0.1, start, end, end + above])
     return AgentPath(agent.name, times, pos, np.full(4, yaw), np.zeros(4), agent.actuators)
 
 
@@ -141,7 +141,7 @@ def compose_pickplace(rng: np.random.Generator, *, width: int = 640, height: int
     place = None
     for _ in range(200):
         xy = _place(rng, [p for p in s.parts if p is not target], target.radius + 0.02, inner, tries=1)
-        if xy is not None and 0.2 <= np.linalg.norm(xy - target.xy) <= 0.45:
+        if xy is not None and 0.12 <= np.linalg.norm(xy - target.xy) <= 0.28:
             place = xy
             break
     if place is None:
@@ -168,7 +168,7 @@ def compose_pickplace(rng: np.random.Generator, *, width: int = 640, height: int
             if not _clear(part.xy, end, s.parts + blocked, busy | {part.name}, part.radius + 0.03):
                 continue
             sweeper = s.rigid_pusher()
-            t0 = float(rng.uniform(1.0, 4.0))
+            t0 = float(rng.uniform(2.0, 4.0))
             agents.append(_sweep(rng, sweeper, part, dist, t0, t0 + float(rng.uniform(6.0, 9.0)), d))
             busy.add(part.name)
             break
@@ -177,7 +177,7 @@ def compose_pickplace(rng: np.random.Generator, *, width: int = 640, height: int
             if part.name in busy or part.kind not in ("ball", "block"):
                 continue
             ang = np.arctan2(-part.xy[1], -part.xy[0]) + rng.uniform(-0.6, 0.6)
-            speed = float(rng.uniform(0.5, 0.9)) if part.kind == "ball" else float(rng.uniform(0.6, 1.0))
+            speed = float(rng.uniform(0.35, 0.6)) if part.kind == "ball" else float(rng.uniform(0.5, 0.8))
             v = np.array([np.cos(ang), np.sin(ang)]) * speed
             w = (np.array([-v[1], v[0]]) / part.radius if part.kind == "ball" else np.zeros(2))
             spin = 0.0 if part.kind == "ball" else float(rng.uniform(-6, 6))
