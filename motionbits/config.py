@@ -85,7 +85,6 @@ class MotionBitsConfig:
     # ours: a pixel's flow residual counts fully where its image gradient reaches this many
     # grey levels per px, proportionally less on flatter pixels (their flow is interpolated)
     flow_texture: float = 4.0
-    move_cost: float = 0.15  # px: mask cost of any MotionBit over the background (ties -> static)
     # ours: a pixel's carried MotionBit label is credited (prior_bonus) only where the
     # MotionBit's motion once explained that pixel better than "static" by this many grey
     # levels (3x3 mean) -- a label smeared onto a flat static region does not persist
@@ -96,6 +95,9 @@ class MotionBitsConfig:
     # some frame), and different bodies for good once it is worse by merge_disagree
     merge_agree: float = 1.5
     merge_disagree: float = 6.0
+    # ours (motionbits/retirement.py): a MotionBit is retired when the static world explains
+    # its pixels better, by this many grey levels, than its own motion since its birth
+    retire_margin: float = 5.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
@@ -128,11 +130,11 @@ class MotionBitsConfig:
             "prior_bonus": self.prior_bonus >= 0,
             "photo_weight": self.photo_weight >= 0,
             "flow_texture": self.flow_texture > 0,
-            "move_cost": self.move_cost >= 0,
             "pixel_evidence": self.pixel_evidence >= 0,
             "match_iou": 0.0 <= self.match_iou <= 1.0,
             "merge_agree": self.merge_agree >= 0,
             "merge_disagree": self.merge_disagree >= self.merge_agree,
+            "retire_margin": self.retire_margin >= 0,
         }
         bad = [name for name, ok in checks.items() if not ok]
         if bad:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from functools import cache
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterator
 
 import cv2
@@ -33,7 +33,9 @@ from motionbits.merging import (
     MotionBitGroups, fit_affine, rigid_matrix, stillness_visible, touching_pairs, union_excess)
 from motionbits.mcl import markov_cluster_coarse, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
+from motionbits.objects import Instance, encode_rle
 from motionbits.propagation import grid_seeds
+from motionbits.retirement import Origin, moved_evidence
 from motionbits.twists import fit_local_motions, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
@@ -44,29 +46,11 @@ STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "mas
           "bookkeeping")
 
 
-@dataclass(frozen=True)
-class MotionBit:
-    """One MotionBit in one frame (coordinates in input pixels).
-
-    Attributes:
-        id: stable id (> 0), kept across frames.
-        area: pixels in the mask.
-        bbox: (x0, y0, x1, y1), inclusive-exclusive.
-        centroid: (x, y).
-        twist: (omega rad/frame, v_x, v_y px/frame) spatial twist of the motion from the
-            previous frame, about the image origin; zeros when it has no cluster this frame.
-        moving: whether it moved between the previous frame and this one.
-        first_moved, last_moved: frame indices of its first and latest motion.
-    """
-
-    id: int
-    area: int
-    bbox: tuple[int, int, int, int]
-    centroid: tuple[float, float]
-    twist: tuple[float, float, float]
-    moving: bool
-    first_moved: int
-    last_moved: int
+#: One MotionBit in one frame: the shared :class:`motionbits.Instance` with ``twist``,
+#: ``moving``, ``first_moved`` and ``last_moved`` set (coordinates in input pixels; the
+#: twist is zeros when it has no cluster this frame). ``update`` leaves ``mask`` unset
+#: (the label map holds it): :meth:`MotionBitsResult.instances` attaches masks.
+MotionBit = Instance
 
 
 @dataclass
@@ -90,6 +74,13 @@ class MotionBitsResult:
     @property
     def ids(self) -> list[int]:
         return [mb.id for mb in self.motionbits]
+
+    def instances(self, rle: bool = False) -> list[Instance]:
+        """``motionbits`` with their (H, W) bool masks from ``labels`` (or COCO RLE when
+        ``rle``; extra ``coco``); ``motionbits.to_supervision`` takes the result."""
+        return [replace(mb, mask=None if rle else self.labels == mb.id,
+                        rle=encode_rle(self.labels == mb.id) if rle else None)
+                for mb in self.motionbits]
 
 
 _STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # the identity motion
@@ -143,6 +134,7 @@ class MotionBitsSegmenter:
         self._past_max: np.ndarray | None = None  # (n, k) largest earlier edge weights
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
+        self._origins: dict[int, Origin] = {}  # id -> its birth frame and motion since
         self._tentative: set[int] = set()  # ids born at the last frame, not yet confirmed
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._first_moved: dict[int, int] = {}
@@ -183,6 +175,21 @@ class MotionBitsSegmenter:
         g = self._grid
         return MotionBitsResult(self.frame_index, np.zeros((h, w), np.int32), [],
                                 np.zeros((g.rows, g.cols), np.int32), dict(self._timings))
+
+    @property
+    def backend(self) -> str:
+        """Where the heavy steps run: ``"numpy"`` or ``"torch:<device>"`` (resolved)."""
+        return self._ops.name
+
+    def __call__(self, frames: FrameSource) -> list[np.ndarray]:
+        """Segment one whole video from its first frame: one (H, W) int32 label map per
+        frame (the ``frames -> label maps`` interface of ``somprompt.GroundedVQA``).
+
+        Resets the stream first, so each call is a new video. ``frames``: anything
+        :func:`motionbits.video.iter_frames` reads (file, folder, array, frames).
+        """
+        self.reset()
+        return [self.update(frame).labels for frame in iter_frames(frames)]
 
     # ------------------------------------------------------------------ main step
     def update(self, frame: np.ndarray) -> MotionBitsResult:
@@ -227,6 +234,7 @@ class MotionBitsSegmenter:
                                    nan=1e3, posinf=1e3)
             # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), _gray(self._prev)
+            raw_prev_g = prev_g
             pulled = pull_back(prev_g, flow_back)
             gradient = gradient_magnitude(cur_g)
             # a carried label holds a pixel only where the flow is consistent both ways and
@@ -249,7 +257,7 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # camera motion compensation: motion is measured against the dominant motion
             # (flow_m, prev_m); label maps are still carried with the true flow
-            flow_m, prev_m, back_pts = flow_back, self._prev, seen_pts
+            flow_m, prev_m, back_pts, cam = flow_back, self._prev, seen_pts, None
             if cfg.camera_support < 1.0:
                 cam = fit_camera_motion(pts, seen_pts, reliability > 0.5,
                                         support=cfg.camera_support,
@@ -315,14 +323,15 @@ class MotionBitsSegmenter:
             evidence = cache(lambda: motion_gain(cur_g, prev_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, thetas, trans = self._identify(
-                node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability,
+                node_cluster, motions.displacement, prior[ix[:, 1], ix[:, 0]], pts, back_pts,
+                reliability,
                 evidence)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
-                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight, move_cost=cfg.move_cost,
+                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(2 * cw * ch)))
@@ -331,8 +340,12 @@ class MotionBitsSegmenter:
             moving = self._record_motion(node_ids, ids, thetas, trans, pts)
             own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
             reach = int(np.ceil(max(grid.cell)))
+            # born out of pixels that were in view and had never been in a MotionBit
+            margin = 2 * max(grid.cell)
+            in_view = np.all((seen_pts >= margin) & (seen_pts < np.array(
+                [grid.width, grid.height]) - margin), axis=1)
             born = {int(i) for i in ids[ids >= first_new]
-                    if np.mean(hist_nodes[node_ids == i] == 0) > 0.5}
+                    if np.mean((hist_nodes == 0) & in_view, where=node_ids == i) > 0.5}
             for a, b in touching_pairs(labels, reach=reach):
                 if self._groups.known(a, b):
                     continue
@@ -353,6 +366,7 @@ class MotionBitsSegmenter:
                                       union, cur_g, prev_g)
                 if (a in own and b in own) or excess > cfg.merge_disagree:
                     self._groups.observe(a, b, excess)
+            labels = self._retire(labels, ids, thetas, trans, first_new, cam, raw_prev_g, cur_g)
             rep = self._groups.representatives(np.unique(labels[labels > 0]))
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown
@@ -458,13 +472,14 @@ class MotionBitsSegmenter:
         ids = []
         newborn = set()
         for c in range(1, len(big) + 1):
-            moves = np.median(displacement[cluster == c]) > cfg.move_threshold
+            sel = cluster == c
+            moves = np.median(displacement[sel]) > cfg.move_threshold
             if c in matched:
                 i = matched[c]
-                # a MotionBit born last frame stands only if it moves again now
-                ids.append(i if i not in self._tentative or moves else 0)
-            elif (has_interior[c] and moves
-                  and np.mean(evidence()[cluster == c]) > cfg.motion_evidence):
+                # a MotionBit born last frame stands only if it visibly moves again now
+                ids.append(i if i not in self._tentative or (
+                    moves and np.mean(evidence()[sel]) > cfg.motion_evidence) else 0)
+            elif has_interior[c] and moves and np.mean(evidence()[sel]) > cfg.motion_evidence:
                 ids.append(self._next_id)
                 newborn.add(self._next_id)
                 self._next_id += 1
@@ -477,6 +492,29 @@ class MotionBitsSegmenter:
         thetas, trans = fit_cluster_motions(pts, back_pts, reliability, node_ids, ids,
                                             cfg.ransac_threshold)
         return node_ids, ids, thetas, trans
+
+    def _retire(self, labels, ids, thetas, trans, first_new, cam, prev_gray, cur_gray):
+        """Advance every MotionBit's origin by this frame's motions and retire those whose
+        pixels the static world explains better than their own accumulated motion
+        (:mod:`motionbits.retirement`); returns ``labels`` without them."""
+        world = np.eye(3) if cam is None else cam
+        own = {int(i): world @ np.vstack([rigid_matrix(th, t), [0.0, 0.0, 1.0]])
+               for i, th, t in zip(ids, thetas, trans)}
+        present = set(np.unique(labels[labels > 0]).tolist())
+        self._origins = {i: o for i, o in self._origins.items() if i in present}
+        out = labels
+        for i in sorted(present):
+            if i >= first_new:
+                self._origins[i] = Origin(prev_gray, np.eye(3), np.eye(3))
+            origin = self._origins.get(i)
+            if origin is None:
+                continue
+            origin.advance(own.get(i, world), world)
+            gain = moved_evidence(origin, cur_gray, labels == i, 2.0)
+            if gain < -self.config.retire_margin:
+                out = np.where(out == i, 0, out)
+                del self._origins[i]
+        return out
 
     def _record_motion(self, node_ids, ids, thetas, trans, pts) -> set[int]:
         """Ids whose fitted motion moves their nodes by more than ``move_threshold`` (mean)
