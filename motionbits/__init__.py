@@ -1,6 +1,7 @@
 """MotionBits: learning-free segmentation of moving rigid bodies in RGB video."""
 
 from motionbits.config import MotionBitsConfig
+from motionbits.grasp import GraspProposal, grasp_from_mask, grasp_proposals
 from motionbits.segmenter import MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video
 from motionbits.video import iter_frames
 
@@ -9,6 +10,9 @@ __all__ = [
     "MotionBitsConfig",
     "MotionBitsResult",
     "MotionBitsSegmenter",
+    "GraspProposal",
+    "grasp_from_mask",
+    "grasp_proposals",
     "iter_frames",
     "segment_video",
 ]
