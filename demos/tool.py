@@ -17,8 +17,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from motionbits import MotionBitsConfig
-from motionbits.grasp import top_down_grasp
+from motionbits import MotionBitsConfig, grasp_from_mask
 from somprompt import GroundedVQA, MarkRegistry, draw_marks
 
 from .segmentation import Segmentation, segment_window
@@ -57,22 +56,22 @@ def describe_motionbits(seg: Segmentation) -> list[dict[str, Any]]:
     for i in seg.last_ids:
         mask = labels == i
         ys, xs = np.nonzero(mask)
-        g = top_down_grasp(mask)
+        g = grasp_from_mask(mask)
         tw = seg.twists.get(i, (0.0, 0.0, 0.0))
         records.append({
             "id": i,
             "mark": registry.number(i),
             "area": int(mask.sum()),
             "box": [int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1],
-            "centroid": [round(g.center[0], 2), round(g.center[1], 2)],
+            "centroid": [round(g.centroid[0], 2), round(g.centroid[1], 2)],
             "principal_axes": {"major": [round(v, 4) for v in g.major_axis],
                                "minor": [round(v, 4) for v in g.minor_axis],
-                               "major_length": round(g.major_length, 2),
-                               "minor_length": round(g.minor_length, 2)},
+                               "major_length": round(g.length, 2),
+                               "minor_length": round(g.width, 2)},
             "twist": {"omega": float(tw[0]), "vx": float(tw[1]), "vy": float(tw[2])},
             "moved_frames": list(seg.moved.get(i, [])),
             "mask": rle_encode(mask),
-            "grasp": {"center": [round(g.center[0], 2), round(g.center[1], 2)],
+            "grasp": {"center": [round(g.centroid[0], 2), round(g.centroid[1], 2)],
                       "angle": round(g.angle, 4), "width": round(g.width, 2)},
         })
     records.sort(key=lambda r: (-r["area"], r["id"]))
