@@ -166,8 +166,7 @@ class _Handlers:
         self._vlm: Any = None
 
     def run(self, path, n_nodes, start, frames, every, progress=None):
-        import gradio as gr
-
+        """Segment; returns (overlay mp4, table rows, labels.zip, summary.json, state, status)."""
         empty = (None, [], None, None, None, None)
         try:
             start, frames, every, n_nodes = int(start or 0), int(frames or 0), int(every or 1), int(n_nodes)
@@ -175,7 +174,7 @@ class _Handlers:
                 raise ValueError("start and frames must be >= 0 and step >= 1")
             n, _, fps = check_video(path, self.config.limits)
             count = _window(n, start, frames, every, self.config.limits)
-            bar = progress if progress is not None else gr.Progress()
+            bar = progress if progress is not None else (lambda *a, **k: None)
             bar((0, count), desc="segmenting", unit="frames")
             seg = segment_window(path, start=start, frames=count, every=every, n_nodes=n_nodes,
                                  progress=lambda done, total: bar((done, count), desc="segmenting",
@@ -202,6 +201,7 @@ class _Handlers:
             return (*empty[:5], f"**Error:** {type(exc).__name__}: {' '.join(str(exc).split())}")
 
     def ask(self, seg: Segmentation | None, question: str):
+        """Answer; returns (answer text, highlight image or None, "Highlighted: ..." or an error)."""
         try:
             if seg is None:
                 raise ValueError("run the segmentation first, then ask")
