@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from functools import cache
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterator
 
 import cv2
@@ -34,6 +34,7 @@ from motionbits.graph import (
 from motionbits.identity import match_ids, refine_history
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
 from motionbits.mcl import markov_cluster_coarse, normalize_rows
+from motionbits.objects import Instance, encode_rle
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds
 from motionbits.twists import fit_local_motions, se2_log
@@ -45,29 +46,11 @@ __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_vide
 STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "bookkeeping")
 
 
-@dataclass(frozen=True)
-class MotionBit:
-    """One MotionBit in one frame (coordinates in input pixels).
-
-    Attributes:
-        id: stable id (> 0), kept across frames.
-        area: pixels in the mask.
-        bbox: (x0, y0, x1, y1), inclusive-exclusive.
-        centroid: (x, y).
-        twist: (omega rad/frame, v_x, v_y px/frame) spatial twist of the motion from the
-            previous frame, about the image origin; zeros when it has no cluster this frame.
-        moving: whether it moved between the previous frame and this one.
-        first_moved, last_moved: frame indices of its first and latest motion.
-    """
-
-    id: int
-    area: int
-    bbox: tuple[int, int, int, int]
-    centroid: tuple[float, float]
-    twist: tuple[float, float, float]
-    moving: bool
-    first_moved: int
-    last_moved: int
+#: One MotionBit in one frame: the shared :class:`motionbits.Instance` with ``twist``,
+#: ``moving``, ``first_moved`` and ``last_moved`` set (coordinates in input pixels; the
+#: twist is zeros when it has no cluster this frame). ``update`` leaves ``mask`` unset
+#: (the label map holds it): :meth:`MotionBitsResult.instances` attaches masks.
+MotionBit = Instance
 
 
 @dataclass
@@ -91,6 +74,13 @@ class MotionBitsResult:
     @property
     def ids(self) -> list[int]:
         return [mb.id for mb in self.motionbits]
+
+    def instances(self, rle: bool = False) -> list[Instance]:
+        """``motionbits`` with their (H, W) bool masks from ``labels`` (or COCO RLE when
+        ``rle``; extra ``coco``); ``motionbits.to_supervision`` takes the result."""
+        return [replace(mb, mask=None if rle else self.labels == mb.id,
+                        rle=encode_rle(self.labels == mb.id) if rle else None)
+                for mb in self.motionbits]
 
 
 def _gray(frame: np.ndarray) -> np.ndarray:
@@ -177,6 +167,21 @@ class MotionBitsSegmenter:
         g = self._grid
         return MotionBitsResult(self.frame_index, np.zeros((h, w), np.int32), [],
                                 np.zeros((g.rows, g.cols), np.int32), dict(self._timings))
+
+    @property
+    def backend(self) -> str:
+        """Where the heavy steps run: ``"numpy"`` or ``"torch:<device>"`` (resolved)."""
+        return self._ops.name
+
+    def __call__(self, frames: FrameSource) -> list[np.ndarray]:
+        """Segment one whole video from its first frame: one (H, W) int32 label map per
+        frame (the ``frames -> label maps`` interface of ``somprompt.GroundedVQA``).
+
+        Resets the stream first, so each call is a new video. ``frames``: anything
+        :func:`motionbits.video.iter_frames` reads (file, folder, array, frames).
+        """
+        self.reset()
+        return [self.update(frame).labels for frame in iter_frames(frames)]
 
     # ------------------------------------------------------------------ main step
     def update(self, frame: np.ndarray) -> MotionBitsResult:
