@@ -25,10 +25,10 @@ from typing import Any
 import cv2
 import numpy as np
 
-from motionbits import MotionBitsConfig
+from motionbits.video_writer import write_h264
 from somprompt import MarkRegistry, draw_marks, mark_video
 
-from .media import write_demo_clip, write_h264, write_labels_zip
+from .media import write_demo_clip, write_labels_zip
 from .segmentation import Segmentation, segment_window
 from .tool import answer_question, describe_motionbits
 from .vlm import VLMError, make_vlm, vlm_spec_help

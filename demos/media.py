@@ -1,42 +1,19 @@
-"""Files the demos hand out: browser-playable H.264 video, label maps as a zip, example clips."""
+"""Files the demos hand out: label maps as a zip, the generated example clip (H.264)."""
 
 from __future__ import annotations
 
 import io
 import os
 import zipfile
-from fractions import Fraction
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 from PIL import Image
 
-__all__ = ["write_h264", "write_labels_zip", "write_demo_clip"]
+from motionbits.video_writer import write_h264
 
-
-def write_h264(frames: Sequence[np.ndarray], path: "str | os.PathLike", fps: float = 10.0) -> Path:
-    """Write (H, W, 3) uint8 RGB frames as an H.264 (yuv420p) mp4 that browsers play (PyAV).
-
-    Odd sizes are cropped by one pixel (yuv420p needs even sides).
-    """
-    import av
-
-    if not frames:
-        raise ValueError("no frames to write")
-    if not fps > 0:
-        raise ValueError(f"fps must be > 0, got {fps}")
-    h, w = (s - s % 2 for s in frames[0].shape[:2])
-    path = Path(path)
-    with av.open(str(path), mode="w") as container:
-        stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1000))
-        stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
-        stream.options = {"crf": "23", "preset": "veryfast", "movflags": "+faststart"}
-        for f in frames:
-            frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(f[:h, :w]), format="rgb24")
-            container.mux(stream.encode(frame))
-        container.mux(stream.encode())
-    return path
+__all__ = ["write_labels_zip", "write_demo_clip"]
 
 
 def write_labels_zip(label_maps: Sequence[np.ndarray], frame_indices: Sequence[int],

@@ -17,25 +17,14 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from motionbits import MotionBitsConfig, grasp_from_mask
+from motionbits import MotionBitsConfig, grasp_from_mask, instance_from_mask
 from somprompt import GroundedVQA, MarkRegistry, draw_marks
 
 from .segmentation import Segmentation, segment_window
 from .vlm import VLMError, make_vlm, stub_answer
 
 __all__ = ["Answer", "answer_question", "ask_about_motion", "cited_records", "describe_motionbits",
-           "rle_encode", "segment_moving_bodies"]
-
-
-def rle_encode(mask: np.ndarray) -> dict[str, Any]:
-    """COCO RLE of an (H, W) bool mask: ``{"size": [H, W], "counts": str}`` (pycocotools).
-
-    Decode with ``pycocotools.mask.decode({"size": ..., "counts": counts.encode()})``.
-    """
-    from pycocotools import mask as coco_mask
-
-    rle = coco_mask.encode(np.asfortranarray(mask.astype(np.uint8)))
-    return {"size": [int(s) for s in rle["size"]], "counts": rle["counts"].decode("ascii")}
+           "segment_moving_bodies"]
 
 
 def describe_motionbits(seg: Segmentation) -> list[dict[str, Any]]:
@@ -55,23 +44,23 @@ def describe_motionbits(seg: Segmentation) -> list[dict[str, Any]]:
     records = []
     for i in seg.last_ids:
         mask = labels == i
-        ys, xs = np.nonzero(mask)
+        obj = instance_from_mask(mask, i, rle=True)  # box, area, centroid, COCO RLE
         g = grasp_from_mask(mask)
         tw = seg.twists.get(i, (0.0, 0.0, 0.0))
         records.append({
             "id": i,
             "mark": registry.number(i),
-            "area": int(mask.sum()),
-            "box": [int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1],
-            "centroid": [round(g.centroid[0], 2), round(g.centroid[1], 2)],
+            "area": obj.area,
+            "box": list(obj.bbox),
+            "centroid": [round(c, 2) for c in obj.centroid],
             "principal_axes": {"major": [round(v, 4) for v in g.major_axis],
                                "minor": [round(v, 4) for v in g.minor_axis],
                                "major_length": round(g.length, 2),
                                "minor_length": round(g.width, 2)},
             "twist": {"omega": float(tw[0]), "vx": float(tw[1]), "vy": float(tw[2])},
             "moved_frames": list(seg.moved.get(i, [])),
-            "mask": rle_encode(mask),
-            "grasp": {"center": [round(g.centroid[0], 2), round(g.centroid[1], 2)],
+            "mask": obj.rle,
+            "grasp": {"center": [round(c, 2) for c in g.centroid],
                       "angle": round(g.angle, 4), "width": round(g.width, 2)},
         })
     records.sort(key=lambda r: (-r["area"], r["id"]))
@@ -191,11 +180,10 @@ def cited_records(seg: Segmentation, ids: list[int]) -> list[dict[str, Any]]:
     registry = MarkRegistry.from_label_maps(seg.label_maps)
     out = []
     for i in ids:
-        mask = labels == i
-        rec: dict[str, Any] = {"id": int(i), "mark": registry.number(i), "area": int(mask.sum())}
-        if mask.any():
-            ys, xs = np.nonzero(mask)
-            rec["box"] = [int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1]
+        obj = instance_from_mask(labels == i, i)
+        rec: dict[str, Any] = {"id": int(i), "mark": registry.number(i), "area": obj.area}
+        if obj.area:
+            rec["box"] = list(obj.bbox)
         out.append(rec)
     return out
 

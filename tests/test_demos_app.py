@@ -14,7 +14,8 @@ pytest.importorskip("av")
 pytest.importorskip("pycocotools")
 
 from demos.app import DemoConfig, DemoLimits, _Handlers, highlight  # noqa: E402
-from demos.media import write_demo_clip, write_h264  # noqa: E402
+from demos.media import write_demo_clip  # noqa: E402
+from motionbits.video_writer import write_h264  # noqa: E402
 
 
 def _handlers(tmp_path, **config) -> _Handlers:

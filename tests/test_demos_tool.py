@@ -15,10 +15,11 @@ pytest.importorskip("pycocotools")
 from pycocotools import mask as coco_mask  # noqa: E402
 
 from demos import VLMError, ask_about_motion, make_vlm, openai_tools, segment_moving_bodies  # noqa: E402
-from demos.media import write_demo_clip, write_h264  # noqa: E402
+from demos.media import write_demo_clip  # noqa: E402
 from demos.segmentation import segment_window  # noqa: E402
 from demos.tool import answer_question  # noqa: E402
 from motionbits import grasp_from_mask  # noqa: E402
+from motionbits.video_writer import write_h264  # noqa: E402
 
 N_FRAMES, SIZE, NODES = 8, (240, 320), 900
 
