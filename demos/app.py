@@ -305,8 +305,8 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("GRADIO_ANALYTICS_ENABLED", "False")
     config = DemoConfig(vlm=args.vlm, n_nodes=args.nodes, examples=_examples_in_checkout())
     app = build_app(config)
-    app.queue().launch(server_name=args.host, server_port=args.port, allowed_paths=[str(app.workdir)],
-                       show_error=False)
+    allowed = [str(app.workdir), *{str(Path(e).parent) for e in config.examples}]
+    app.queue().launch(server_name=args.host, server_port=args.port, allowed_paths=allowed, show_error=False)
     return 0
 
 

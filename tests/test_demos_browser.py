@@ -117,6 +117,11 @@ def test_demo_in_browser(demo_server, tmp_path):
             status.get_by_text("MotionBits in the last frame").wait_for(timeout=90_000)
             page.locator("#overlay video").wait_for()
             assert page.locator("#overlay video").get_attribute("src")
+            # the browser decodes the overlay (H.264): it knows the frame size and raised no error
+            page.wait_for_function("() => { const v = document.querySelector('#overlay video');"
+                                   " return v && v.readyState >= 1 && v.videoWidth > 0; }")
+            assert page.eval_on_selector("#overlay video", "v => [v.videoWidth, v.videoHeight, v.error]") \
+                == [320, 240, None]
             rows = int(page.locator("#table [role=grid]").get_attribute("aria-rowcount")) - 1  # - header
             assert rows >= 3
 
