@@ -29,7 +29,7 @@ from motionbits.video_writer import write_h264
 from somprompt import MarkRegistry, draw_marks, mark_video
 
 from .media import write_demo_clip, write_labels_zip
-from .segmentation import Segmentation, segment_window
+from .segmentation import Segmentation, max_frames_for, segment_window
 from .tool import answer_question, describe_motionbits
 from .vlm import VLMError, make_vlm, vlm_spec_help
 
@@ -54,7 +54,8 @@ class DemoLimits:
 
     def text(self) -> str:
         return (f"video files up to {self.max_mb:g} MB, at most {self.max_side} px on the longer "
-                f"side, at least 2 frames; at most {self.max_frames} frames processed per run")
+                f"side, at least 2 frames; at most {self.max_frames} frames processed per run "
+                f"(fewer for large frames: {max_frames_for(1080, 1920)} at 1920x1080)")
 
 
 @dataclass(frozen=True)
@@ -109,8 +110,8 @@ def check_video(path: str | None, limits: DemoLimits) -> tuple[int, tuple[int, i
     return n, (h, w), fps
 
 
-def _window(n: int, start: int, frames: int, every: int, limits: DemoLimits) -> int:
-    """Frames the run will process; raises ValueError for a window outside the video."""
+def _window(n: int, size: tuple[int, int], start: int, frames: int, every: int, limits: DemoLimits) -> int:
+    """Frames the run will process; raises ValueError for a window outside the video or over the limits."""
     if start >= n:
         raise ValueError(f"start frame {start} is past the end of the video ({n} frames)")
     count = (n - 1 - start) // every + 1
@@ -118,9 +119,10 @@ def _window(n: int, start: int, frames: int, every: int, limits: DemoLimits) -> 
         count = min(count, frames)
     if count < 2:
         raise ValueError(f"the window holds {count} frame (start {start}, step {every}); need at least 2")
-    if count > limits.max_frames:
-        raise ValueError(f"the window holds {count} frames, over the limit of {limits.max_frames}: "
-                         "set Frames or a larger Step")
+    most = min(limits.max_frames, max_frames_for(*size))
+    if count > most:
+        raise ValueError(f"the window holds {count} frames, over the limit of {most} at "
+                         f"{size[1]}x{size[0]}: set Frames or a larger Step")
     return count
 
 
@@ -172,8 +174,8 @@ class _Handlers:
             start, frames, every, n_nodes = int(start or 0), int(frames or 0), int(every or 1), int(n_nodes)
             if start < 0 or frames < 0 or every < 1:
                 raise ValueError("start and frames must be >= 0 and step >= 1")
-            n, _, fps = check_video(path, self.config.limits)
-            count = _window(n, start, frames, every, self.config.limits)
+            n, size, fps = check_video(path, self.config.limits)
+            count = _window(n, size, start, frames, every, self.config.limits)
             bar = progress if progress is not None else (lambda *a, **k: None)
             bar((0, count), desc="segmenting", unit="frames")
             seg = segment_window(path, start=start, frames=count, every=every, n_nodes=n_nodes,

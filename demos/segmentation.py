@@ -12,10 +12,19 @@ import numpy as np
 
 from motionbits import MotionBitsConfig, MotionBitsSegmenter, iter_frames
 
-__all__ = ["MAX_WINDOW_FRAMES", "Segmentation", "check_window", "segment_window"]
+__all__ = ["MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_window", "max_frames_for",
+           "segment_window"]
 
-#: Most frames one call keeps in memory (frames and label maps are returned).
-MAX_WINDOW_FRAMES = 600
+#: Most frames one call processes (frames and label maps are kept in memory and returned) ...
+MAX_WINDOW_FRAMES = 300
+#: ... and most pixels over all of them: 300 frames of 480x640, 44 of 1920x1080 (about
+#: 7 bytes a pixel are kept: RGB and an int32 label).
+MAX_WINDOW_PIXELS = 300 * 480 * 640
+
+
+def max_frames_for(height: int, width: int) -> int:
+    """Most frames of ``height`` x ``width`` one window may hold (at least 2)."""
+    return max(2, min(MAX_WINDOW_FRAMES, MAX_WINDOW_PIXELS // max(1, height * width)))
 
 #: progress(done, total or None)
 Progress = Callable[[int, "int | None"], None]
@@ -95,8 +104,8 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
     Args:
         video: a video file or a folder of images.
         start: index of the first frame used.
-        frames: how many frames to use (>= 2; None: to the end, at most
-            ``MAX_WINDOW_FRAMES``).
+        frames: how many frames to use (>= 2; None: to the end). At most
+            ``max_frames_for(H, W)`` frames (``MAX_WINDOW_FRAMES``, fewer for large frames).
         every: use every ``every``-th frame.
         n_nodes: graph nodes of the segmenter (``MotionBitsConfig.n_nodes``).
         config: other segmenter parameters (``n_nodes`` overrides its field).
@@ -106,7 +115,7 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
     Raises:
         FileNotFoundError: no such file or folder.
         ValueError: a bad argument, an unreadable video, fewer than two frames in the
-            window, or more than ``MAX_WINDOW_FRAMES``.
+            window, or more than ``max_frames_for(H, W)``.
     """
     start, frames, every, n_nodes = check_window(start, frames, every, n_nodes)
     path = _check_video(video)
@@ -114,13 +123,20 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
     seg = MotionBitsSegmenter(cfg)
     out = Segmentation(str(path), [], [], [], config=cfg)
     t0 = time.perf_counter()
+    cap = MAX_WINDOW_FRAMES
     for i, frame in enumerate(iter_frames(path)):
         if i < start or (i - start) % every:
             continue
-        if len(out.frames) == (frames or MAX_WINDOW_FRAMES):
+        if not out.frames:
+            cap = max_frames_for(*frame.shape[:2])
+            if frames is not None and frames > cap:
+                raise ValueError(f"frames={frames} is too many at {frame.shape[1]}x{frame.shape[0]}: "
+                                 f"at most {cap} frames of this size per call")
+        if len(out.frames) == (frames or cap):
             if frames is None:
-                raise ValueError(f"the window holds more than {MAX_WINDOW_FRAMES} frames; "
-                                 "choose fewer with frames= or a larger every=")
+                raise ValueError(f"the window holds more than {cap} frames of {frame.shape[1]}x"
+                                 f"{frame.shape[0]} (the most per call); choose fewer with frames= "
+                                 "or a larger every=")
             break
         result = seg.update(frame)
         out.frame_indices.append(i)

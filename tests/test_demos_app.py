@@ -40,11 +40,13 @@ def _status_of_run(h, path, **kw):
     ("one_frame", "has 1 frame"),
     ("too_large", "over the limit of 100 px"),
     ("window", "start frame 50 is past the end"),
+    ("too_long", "the window holds 6 frames, over the limit of 3 at 160x120"),
 ])
 def test_bad_input_is_a_readable_message(tmp_path, clip, case, words):
-    h = _handlers(tmp_path, limits=DemoLimits(max_side=100) if case == "too_large" else DemoLimits())
+    limits = {"too_large": DemoLimits(max_side=100), "too_long": DemoLimits(max_frames=3)}
+    h = _handlers(tmp_path, limits=limits.get(case, DemoLimits()))
     paths = {"none": None, "text": tmp_path / "a.txt", "empty": tmp_path / "empty.mp4",
-             "one_frame": tmp_path / "one.mp4", "too_large": clip, "window": clip}
+             "one_frame": tmp_path / "one.mp4", "too_large": clip, "window": clip, "too_long": clip}
     (tmp_path / "a.txt").write_text("hello")
     (tmp_path / "empty.mp4").write_bytes(b"")
     write_h264([np.zeros((32, 32, 3), np.uint8)], tmp_path / "one.mp4")

@@ -118,3 +118,13 @@ def test_vlm_choice_errors(tmp_path, clip):
         answer_question(seg, "What moved?", down)
     scripted = answer_question(seg, "What moved?", "stub:Nothing, really.")
     assert scripted.answer == "Nothing, really." and scripted.cited_ids == []
+
+
+def test_window_memory_limit(clip, monkeypatch):
+    import demos.segmentation
+
+    monkeypatch.setattr(demos.segmentation, "MAX_WINDOW_PIXELS", 3 * SIZE[0] * SIZE[1])
+    with pytest.raises(ValueError, match="at most 3 frames of this size"):
+        segment_moving_bodies(clip, frames=5, n_nodes=100)
+    with pytest.raises(ValueError, match="more than 3 frames of 320x240"):
+        segment_moving_bodies(clip, n_nodes=100)
