@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 
 from motionbits.video_writer import write_h264
-from somprompt import MarkRegistry, draw_marks, mark_video
+from somprompt import draw_marks, mark_video
 
 from .media import write_demo_clip, write_labels_zip
 from .segmentation import Segmentation, max_frames_for, segment_window
@@ -146,8 +146,7 @@ def highlight(seg: Segmentation, ids: list[int], dim: float = 0.35) -> np.ndarra
     """
     frame, labels = seg.frames[-1], seg.label_maps[-1]
     keep = np.isin(labels, np.asarray(ids, dtype=labels.dtype)) if ids else np.zeros(labels.shape, bool)
-    registry = MarkRegistry.from_label_maps(seg.label_maps)
-    marked = draw_marks(frame, np.where(keep, labels, 0), registry=registry)
+    marked = draw_marks(frame, np.where(keep, labels, 0), registry=seg.registry)
     out = (frame.astype(np.float32) * dim).astype(np.uint8)
     # marks (numbers, outlines) may extend past the masks: keep every pixel they changed
     changed = keep | np.any(marked != frame, axis=2)
@@ -211,7 +210,7 @@ class _Handlers:
                 raise ValueError("type a question first")
             vlm = None if self.config.vlm == "stub" else self._load_vlm()
             ans = answer_question(seg, question.strip(), vlm)
-            registry = MarkRegistry.from_label_maps(seg.label_maps)
+            registry = seg.registry
             cited = ", ".join(f"[{registry.text(i)}] (id {i})" for i in ans.cited_ids) or "none"
             return ans.answer, highlight(seg, ans.cited_ids), f"Highlighted: {cited}."
         except (ValueError, VLMError) as exc:

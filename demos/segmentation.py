@@ -5,12 +5,14 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from motionbits import MotionBitsConfig, MotionBitsSegmenter, iter_frames
+from somprompt import MarkRegistry
 
 __all__ = ["MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_window", "max_frames_for",
            "segment_window"]
@@ -53,6 +55,12 @@ class Segmentation:
     twists: dict[int, tuple[float, float, float]] = field(default_factory=dict)
     config: MotionBitsConfig = field(default_factory=MotionBitsConfig)
     seconds: float = 0.0
+
+    @cached_property
+    def registry(self) -> MarkRegistry:
+        """MotionBit id -> mark number (order of first appearance), as on the overlay
+        (``somprompt.mark_video``) and in ``GroundedVQA``."""
+        return MarkRegistry.from_label_maps(self.label_maps)
 
     @property
     def last_ids(self) -> list[int]:

@@ -18,7 +18,7 @@ import numpy as np
 from PIL import Image
 
 from motionbits import MotionBitsConfig, grasp_from_mask, instance_from_mask
-from somprompt import GroundedVQA, MarkRegistry, draw_marks
+from somprompt import GroundedVQA, draw_marks
 
 from .segmentation import Segmentation, segment_window
 from .vlm import VLMError, make_vlm, stub_answer
@@ -40,7 +40,7 @@ def describe_motionbits(seg: Segmentation) -> list[dict[str, Any]]:
     towards +y, ``width`` px opening} as in the paper's tower-stacking controller.
     """
     labels = seg.label_maps[-1]
-    registry = MarkRegistry.from_label_maps(seg.label_maps)
+    registry = seg.registry
     records = []
     for i in seg.last_ids:
         mask = labels == i
@@ -73,8 +73,7 @@ def _write_marked(seg: Segmentation, path: "str | os.PathLike") -> str:
         raise ValueError(f"marked_image must end in .png or .jpg, got {str(out)!r}")
     if not out.parent.is_dir():
         raise FileNotFoundError(f"folder of marked_image does not exist: {out.parent}")
-    registry = MarkRegistry.from_label_maps(seg.label_maps)
-    Image.fromarray(draw_marks(seg.frames[-1], seg.label_maps[-1], registry=registry)).save(out)
+    Image.fromarray(draw_marks(seg.frames[-1], seg.label_maps[-1], registry=seg.registry)).save(out)
     return str(out)
 
 
@@ -177,7 +176,7 @@ def answer_question(seg: Segmentation, question: str, vlm: "str | Any | None" = 
 def cited_records(seg: Segmentation, ids: list[int]) -> list[dict[str, Any]]:
     """``{"id", "mark", "area", "box"}`` of each cited id on the last frame (no box if absent)."""
     labels = seg.label_maps[-1]
-    registry = MarkRegistry.from_label_maps(seg.label_maps)
+    registry = seg.registry
     out = []
     for i in ids:
         obj = instance_from_mask(labels == i, i)
