@@ -168,7 +168,7 @@ class _Handlers:
 
     def run(self, path, n_nodes, start, frames, every, progress=None):
         """Segment; returns (overlay mp4, table rows, labels.zip, summary.json, state, status)."""
-        empty = (None, [], None, None, None, None)
+        empty = (None, [], None, None, None)  # overlay, table, zip, summary, state
         try:
             start, frames, every, n_nodes = int(start or 0), int(frames or 0), int(every or 1), int(n_nodes)
             if start < 0 or frames < 0 or every < 1:
@@ -196,10 +196,10 @@ class _Handlers:
             return (str(video), _table(records), str(zip_path), str(out / "summary.json"),
                     seg, status)
         except (ValueError, FileNotFoundError, TypeError) as exc:
-            return (*empty[:5], f"**Error:** {exc}")
+            return (*empty, f"**Error:** {exc}")
         except Exception as exc:  # never a stack trace in the page
             log.exception("run failed")
-            return (*empty[:5], f"**Error:** {type(exc).__name__}: {' '.join(str(exc).split())}")
+            return (*empty, f"**Error:** {type(exc).__name__}: {' '.join(str(exc).split())}")
 
     def ask(self, seg: Segmentation | None, question: str):
         """Answer; returns (answer text, highlight image or None, "Highlighted: ..." or an error)."""
