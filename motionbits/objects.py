@@ -239,13 +239,18 @@ def to_supervision(objects: Sequence[Instance]) -> Any:
 
     ``id`` -> ``tracker_id``; ``bbox`` -> ``xyxy``; masks -> ``mask`` (when every object
     has one); ``score`` -> ``confidence`` and ``name`` -> ``data["class_name"]`` (when
-    every object has one); MotionBits' ``twist`` -> ``data["twist"]`` (N, 3).
+    every object has one); MotionBits' ``twist`` -> ``data["twist"]`` (N, 3). There is
+    no ``class_id``: colour supervision's annotators by id with
+    ``color_lookup=sv.ColorLookup.TRACK``.
     """
     sv = require("supervision", "supervision")
     objects = list(objects)
     if not objects:
         return sv.Detections.empty()
-    has = lambda attr: all(getattr(o, attr) is not None for o in objects)  # noqa: E731
+
+    def has(attr: str) -> bool:
+        return all(getattr(o, attr) is not None for o in objects)
+
     data: dict[str, np.ndarray] = {}
     if has("name"):
         data["class_name"] = np.array([o.name for o in objects])
@@ -266,15 +271,18 @@ def to_supervision(objects: Sequence[Instance]) -> Any:
 def from_supervision(detections: Any) -> list[Instance]:
     """:class:`Instance` list of an ``sv.Detections``: ids from ``tracker_id`` (else
     1..N); box, area and centroid measured on the masks when present, else from ``xyxy``
-    (rounded outwards; area = box area)."""
+    (rounded outwards; area = box area); ``confidence``, ``data["class_name"]`` and
+    ``data["twist"]`` when present."""
     n = len(detections)
     ids = detections.tracker_id if detections.tracker_id is not None else np.arange(1, n + 1)
     names = (detections.data or {}).get("class_name")
+    twists = (detections.data or {}).get("twist")
     out = []
     for i in range(n):
         fields = {
             "score": None if detections.confidence is None else float(detections.confidence[i]),
             "name": None if names is None else str(names[i]),
+            "twist": None if twists is None else tuple(float(v) for v in twists[i]),
         }
         if detections.mask is not None:
             out.append(instance_from_mask(detections.mask[i], int(ids[i]), **fields))

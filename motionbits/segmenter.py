@@ -34,8 +34,8 @@ from motionbits.graph import (
 from motionbits.identity import match_ids, refine_history
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
 from motionbits.mcl import markov_cluster_coarse, normalize_rows
-from motionbits.objects import Instance, encode_rle
 from motionbits.nodes import NodeGrid, sample_bilinear
+from motionbits.objects import Instance, encode_rle
 from motionbits.propagation import grid_seeds
 from motionbits.twists import fit_local_motions, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames

@@ -72,6 +72,16 @@ def test_readme_snippet_segmenter_plugs_into_grounded_vqa(clip_mp4):
     assert obj.id == first and obj.area == int(mask.sum())
 
 
+def test_grounded_vqa_reads_a_folder_of_images(clip, tmp_path):
+    from somprompt.testing import FixedSegmenter
+
+    for i, frame in enumerate(clip.frames):
+        cv2.imwrite(str(tmp_path / f"{i:05d}.png"), cv2.cvtColor(frame, cv2.COLOR_RGB2BGR))
+    res = GroundedVQA(FixedSegmenter(clip.labels), StubVLM("[1]"))(str(tmp_path), question="?")
+    assert all(np.array_equal(a, b) for a, b in zip(res.frames, clip.frames))
+    assert np.array_equal(res.masks[res.cited_ids[0]], clip.labels[-1] == res.cited_ids[0])
+
+
 def test_segmenter_call_starts_a_new_video_each_time(clip):
     seg = MotionBitsSegmenter(SMALL)
     a = seg(clip.frames)
@@ -96,6 +106,7 @@ def test_label_map_instances_round_trip():
     assert np.array_equal(labels_from_instances(objs, labels.shape), labels)
 
 
+@pytest.mark.filterwarnings("ignore:__array__ implementation:DeprecationWarning")  # inside pycocotools, numpy 2
 def test_coco_rle_round_trip_and_json():
     pycocotools_mask = pytest.importorskip("pycocotools.mask")
     rng = np.random.default_rng(0)
@@ -137,6 +148,13 @@ def test_motionbits_result_and_detections_give_the_same_type(clip):
         assert obj.area == int(obj.get_mask().sum()) and obj.first_moved <= obj.last_moved
     with pytest.raises(ValueError, match="no mask"):
         result.motionbits[0].get_mask()
+    sv = pytest.importorskip("supervision")
+    det = to_supervision(objs)
+    assert det.data["twist"].shape == (len(objs), 3)
+    back = from_supervision(det)
+    np.testing.assert_allclose([o.twist for o in back], [o.twist for o in objs])
+    drawn = sv.MaskAnnotator(color_lookup=sv.ColorLookup.TRACK).annotate(clip.frames[-1].copy(), det)
+    assert not np.array_equal(drawn, clip.frames[-1])
     det = Detections(np.stack([result.labels == i for i in result.ids]), np.linspace(0.9, 0.5, len(result.ids)),
                      [f"body {i}" for i in result.ids])
     from_det = det.instances()
