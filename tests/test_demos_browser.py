@@ -30,6 +30,10 @@ pytest.importorskip("pycocotools")
 from demos.media import write_demo_clip  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+# the installed console script when this environment has it (CI: pip install -e), else the
+# same entry point through python -m
+_SCRIPT = Path(sys.executable).with_name("motionbits-demo")
+DEMO = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "demos.app"]
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync"]
@@ -43,14 +47,14 @@ def _free_port() -> int:
 
 @pytest.fixture(scope="module")
 def demo_server(tmp_path_factory):
-    """``python -m demos.app`` (= ``motionbits-demo``) on a free port; yields (url, seconds to first HTTP 200)."""
+    """``motionbits-demo`` on a free port; yields (url, seconds to the first HTTP 200)."""
     port = _free_port()
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
                GRADIO_ANALYTICS_ENABLED="False")
     log = open(tmp_path_factory.mktemp("demo") / "server.log", "w+")
     t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "demos.app", "--host", "127.0.0.1", "--port", str(port),
-                             "--nodes", "900"], cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
+    proc = subprocess.Popen([*DEMO, "--host", "127.0.0.1", "--port", str(port), "--nodes", "900"],
+                            cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
     url = f"http://127.0.0.1:{port}/"
     try:
         while True:

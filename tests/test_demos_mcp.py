@@ -24,6 +24,10 @@ from demos import openai_tools  # noqa: E402
 from demos.media import write_demo_clip  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+# the installed console script when this environment has it (CI: pip install -e), else the
+# same entry point through python -m
+_SCRIPT = Path(sys.executable).with_name("motionbits-mcp")
+SERVER = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "demos.mcp_server"]
 
 
 @pytest.fixture(scope="module")
@@ -33,8 +37,7 @@ def clip(tmp_path_factory) -> str:
 
 async def _session_run(clip: str, marked: str) -> dict:
     env = {"PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    params = StdioServerParameters(command=sys.executable, args=["-m", "demos.mcp_server"],
-                                   env=env, cwd=str(ROOT))
+    params = StdioServerParameters(command=SERVER[0], args=SERVER[1:], env=env, cwd=str(ROOT))
     out: dict = {}
     with anyio.fail_after(60):
         async with stdio_client(params) as (read, write):
