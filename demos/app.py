@@ -66,6 +66,7 @@ class DemoConfig:
         vlm: VLM spec (:func:`demos.vlm.make_vlm`); default the scripted stub.
         limits: input limits.
         n_nodes: default of the nodes slider.
+        max_new_tokens: longest answer in tokens (None: the VLM adapter's default).
         workdir: folder for generated files (default: a new temporary folder).
         examples: extra example videos (the generated clip is always offered).
     """
@@ -73,6 +74,7 @@ class DemoConfig:
     vlm: str = "stub"
     limits: DemoLimits = field(default_factory=DemoLimits)
     n_nodes: int = 2500
+    max_new_tokens: int | None = None
     workdir: str | None = None
     examples: tuple[str, ...] = ()
 
@@ -209,7 +211,7 @@ class _Handlers:
             if not question or not question.strip():
                 raise ValueError("type a question first")
             vlm = None if self.config.vlm == "stub" else self._load_vlm()
-            ans = answer_question(seg, question.strip(), vlm)
+            ans = answer_question(seg, question.strip(), vlm, max_new_tokens=self.config.max_new_tokens)
             registry = seg.registry
             cited = ", ".join(f"[{registry.text(i)}] (id {i})" for i in ans.cited_ids) or "none"
             return ans.answer, highlight(seg, ans.cited_ids), f"Highlighted: {cited}."
@@ -302,9 +304,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--vlm", default="stub", help=f"VLM for questions: {vlm_spec_help()}")
     parser.add_argument("--nodes", type=int, default=DemoConfig.n_nodes,
                         help="default graph nodes (default: %(default)s)")
+    parser.add_argument("--max-new-tokens", type=int, default=None,
+                        help="longest answer in tokens (default: the VLM adapter's)")
     args = parser.parse_args(argv)
     os.environ.setdefault("GRADIO_ANALYTICS_ENABLED", "False")
-    config = DemoConfig(vlm=args.vlm, n_nodes=args.nodes, examples=_examples_in_checkout())
+    config = DemoConfig(vlm=args.vlm, n_nodes=args.nodes, max_new_tokens=args.max_new_tokens,
+                        examples=_examples_in_checkout())
     app = build_app(config)
     allowed = [str(app.workdir), *{str(Path(e).parent) for e in config.examples}]
     app.queue().launch(server_name=args.host, server_port=args.port, allowed_paths=allowed, show_error=False)

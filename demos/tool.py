@@ -158,14 +158,17 @@ class Answer:
     vlm: Any
 
 
-def answer_question(seg: Segmentation, question: str, vlm: "str | Any | None" = None) -> Answer:
+def answer_question(seg: Segmentation, question: str, vlm: "str | Any | None" = None, *,
+                    max_new_tokens: int | None = None) -> Answer:
     """GroundedVQA on an already segmented window (``seg``'s label maps, no second run).
 
-    ``vlm`` as in :func:`ask_about_motion`.
+    ``vlm`` as in :func:`ask_about_motion`; ``max_new_tokens`` caps the answer (None: the
+    VLM's default).
     """
     if vlm is None or isinstance(vlm, str):
         vlm = make_vlm(vlm or "stub", stub_text=stub_answer(seg.label_maps))
-    vqa = GroundedVQA(lambda frames: seg.label_maps, vlm)
+    generation = {} if max_new_tokens is None else {"max_new_tokens": int(max_new_tokens)}
+    vqa = GroundedVQA(lambda frames: seg.label_maps, vlm, generation=generation)
     try:
         res = vqa(seg.frames, question=question)
     except (ConnectionError, TimeoutError, RuntimeError) as exc:  # endpoint down, model error
