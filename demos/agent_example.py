@@ -17,11 +17,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
 import tempfile
 from typing import Any
 
-__all__ = ["ScriptedLLM", "run_agent", "main"]
+__all__ = ["ScriptedLLM", "main", "run_agent", "server_command"]
 
 TASK = "Find the moving bodies in the video and tell me how to grasp the largest one."
 
@@ -66,19 +67,29 @@ def _call(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
         "function": {"name": name, "arguments": json.dumps(arguments)}}]}
 
 
-async def run_agent(llm: Any, task: str = TASK, *, server_args: list[str] | None = None,
-                    max_turns: int = 6) -> list[dict[str, Any]]:
-    """Run the function-calling loop against ``motionbits-mcp``; returns the conversation.
+def server_command() -> list[str]:
+    """``motionbits-mcp`` if installed next to this Python, else ``python -m demos.mcp_server``."""
+    script = shutil.which("motionbits-mcp", path=os.path.dirname(sys.executable))
+    return [script] if script else [sys.executable, "-m", "demos.mcp_server"]
 
-    The server is this Python running ``demos.mcp_server`` with ``server_args``.
+
+async def run_agent(llm: Any, task: str = TASK, *, server: list[str] | None = None,
+                    max_turns: int = 6) -> list[dict[str, Any]]:
+    """Run the function-calling loop against an MCP server; returns the conversation.
+
+    Args:
+        llm: ``llm(messages, tools) -> assistant message`` (OpenAI format).
+        task: the user's request.
+        server: the server's command line (default :func:`server_command`).
+        max_turns: most LLM replies before giving up.
     """
     from mcp import ClientSession
     from mcp.client.stdio import StdioServerParameters, stdio_client
 
+    command = server or server_command()
     # the SDK starts servers with a minimal environment; keep PYTHONPATH for source checkouts
     env = {"PYTHONPATH": os.environ["PYTHONPATH"]} if "PYTHONPATH" in os.environ else None
-    params = StdioServerParameters(command=sys.executable, args=["-m", "demos.mcp_server", *(server_args or [])],
-                                   env=env)
+    params = StdioServerParameters(command=command[0], args=command[1:], env=env)
     messages: list[dict[str, Any]] = [{"role": "user", "content": task}]
     async with stdio_client(params) as (read, write), ClientSession(read, write) as session:
         await session.initialize()
