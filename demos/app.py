@@ -286,7 +286,6 @@ def build_app(config: DemoConfig | None = None):
                       [overlay, table, labels_zip, summary, seg_state, status])
         ask_btn.click(h.ask, [seg_state, question], [answer, shown, cited])
         question.submit(h.ask, [seg_state, question], [answer, shown, cited])
-    app.workdir = workdir  # where generated files live (allowed_paths of launch)
     return app
 
 
@@ -309,9 +308,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     os.environ.setdefault("GRADIO_ANALYTICS_ENABLED", "False")
     config = DemoConfig(vlm=args.vlm, n_nodes=args.nodes, max_new_tokens=args.max_new_tokens,
-                        examples=_examples_in_checkout())
+                        workdir=tempfile.mkdtemp(prefix="motionbits-demo-"), examples=_examples_in_checkout())
     app = build_app(config)
-    allowed = [str(app.workdir), *{str(Path(e).parent) for e in config.examples}]
+    allowed = [config.workdir, *{str(Path(e).parent) for e in config.examples}]  # files the app may serve
     app.queue().launch(server_name=args.host, server_port=args.port, allowed_paths=allowed, show_error=False)
     return 0
 
