@@ -36,9 +36,15 @@ _LAZY: dict[str, str] = {
     "iter_frames": "motionbits.video",
 }
 
-__all__ = sorted([
-    *_LAZY,
-    "GraspProposal",
+__all__ = [
+    # the segmenter (loaded on first use)
+    "MotionBit",
+    "MotionBitsConfig",
+    "MotionBitsResult",
+    "MotionBitsSegmenter",
+    "iter_frames",
+    "segment_video",
+    # the object type and helpers shared with somprompt and vlm_adapters
     "Instance",
     "MissingDependencyError",
     "as_rgb_array",
@@ -46,14 +52,16 @@ __all__ = sorted([
     "decode_rle",
     "encode_rle",
     "from_supervision",
-    "grasp_from_mask",
-    "grasp_proposals",
     "instance_from_mask",
     "instances_from_labels",
     "labels_from_instances",
     "sample_frame_indices",
     "to_supervision",
-])
+    # top-down grasp proposals from masks (paper Supplement B)
+    "GraspProposal",
+    "grasp_from_mask",
+    "grasp_proposals",
+]
 
 
 def __getattr__(name: str) -> Any:
@@ -69,7 +77,8 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
 
 
-if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
-    from motionbits.config import MotionBitsConfig
-    from motionbits.segmenter import MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video
-    from motionbits.video import iter_frames
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs (names are in __all__)
+    from motionbits.config import MotionBitsConfig  # noqa: F401
+    from motionbits.segmenter import (  # noqa: F401
+        MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video)
+    from motionbits.video import iter_frames  # noqa: F401

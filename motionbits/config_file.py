@@ -41,8 +41,8 @@ def config_from_dict(values: Mapping[str, Any], *, source: str = "config") -> Mo
                          f"valid fields: {', '.join(fields)}")
     checked = {}
     for name, value in values.items():
-        want = _TYPES[fields[name].type]
-        ok = isinstance(value, want) and not (want is not bool and isinstance(value, bool))
+        want = _TYPES.get(fields[name].type, object)  # other types: the config checks them
+        ok = isinstance(value, want) and not (want in (int, float) and isinstance(value, bool))
         if want is float and isinstance(value, int) and not isinstance(value, bool):
             ok, value = True, float(value)
         if not ok:

@@ -93,6 +93,17 @@ def test_segmenter_call_starts_a_new_video_each_time(clip):
 # ------------------------------------------------------------------ one object type
 
 
+def test_import_motionbits_is_light_and_every_name_resolves():
+    code = (
+        "import sys, motionbits\n"
+        "heavy = [m for m in ('cv2', 'scipy', 'PIL', 'torch', 'motionbits.segmenter', 'somprompt') if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+        "for n in motionbits.__all__: getattr(motionbits, n)\n"
+        "assert motionbits.MotionBit is motionbits.Instance\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
 def test_label_map_instances_round_trip():
     labels = np.zeros((30, 40), np.int32)
     labels[2:10, 5:20] = 3
