@@ -84,6 +84,11 @@ def test_demo_answers_http_within_30_s(demo_server):
     assert seconds < 30
 
 
+def uploaded(page, name: str) -> None:
+    """Wait until the upload of ``name`` has finished (its download link is shown)."""
+    page.locator(f'#video-in [data-testid="download-link"][download="{name}"]').wait_for()
+
+
 def _fetch_image(url: str) -> np.ndarray:
     with urllib.request.urlopen(url, timeout=10) as r:
         return np.asarray(Image.open(io.BytesIO(r.read())).convert("RGB"))
@@ -107,7 +112,7 @@ def test_demo_in_browser(demo_server, tmp_path):
 
             # bad input: a readable message in the page, no stack trace
             upload.set_input_files(str(not_video))
-            page.locator("#video-in").get_by_text("notes.txt").first.wait_for()
+            uploaded(page, "notes.txt")
             page.click("#run")
             status = page.locator("#status")
             status.get_by_text("not a video").wait_for()
@@ -116,7 +121,7 @@ def test_demo_in_browser(demo_server, tmp_path):
             # a real clip: upload, run, overlay, table
             page.locator("#video-in button[aria-label='Clear']").first.click()
             upload.set_input_files(str(clip))
-            page.locator("#video-in").get_by_text("clip.mp4").first.wait_for()
+            uploaded(page, "clip.mp4")
             page.click("#run")
             status.get_by_text("MotionBits in the last frame").wait_for(timeout=90_000)
             page.locator("#overlay video").wait_for()
