@@ -24,8 +24,13 @@ import cv2
 import numpy as np
 
 from motionbits.flow import pixel_grid, sample_maps
+from motionbits.nodes import sample_bilinear
 
-__all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous"]
+__all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera"]
+
+#: A node's flow is trusted for the camera fit above this forward-backward reliability
+#: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
+RELIABLE = 0.5
 
 
 def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray, *,
@@ -66,3 +71,35 @@ def stabilize_previous(prev: np.ndarray, h: np.ndarray) -> np.ndarray:
     ht, wd = prev.shape[:2]
     return cv2.warpPerspective(prev, h, (wd, ht), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                borderMode=cv2.BORDER_REPLICATE)
+
+
+def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
+                      flow_back: np.ndarray, prev: np.ndarray, *, support: float,
+                      threshold: float, min_shift: float
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """Motion measured against the dominant (camera) motion, where there is one.
+
+    Args:
+        points, back_points: (n, 2) node positions and their backward-flow targets.
+        reliability: (n,) forward-backward reliability of each node's flow in [0, 1]; the
+            nodes above ``RELIABLE`` fit the camera.
+        flow_back: (H, W, 2) float32 backward flow (current -> previous).
+        prev: (H, W, 3) uint8 previous frame.
+        support, threshold, min_shift: as in :func:`fit_camera_motion`; ``support`` 1.0
+            turns compensation off.
+
+    Returns:
+        (flow_m, prev_m, back_m, cam): the backward flow (H, W, 2), the previous frame and
+        the nodes' backward targets (n, 2) relative to the camera, and the camera's 3x3
+        similarity -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects)
+        when no camera motion is found.
+    """
+    if support >= 1.0:
+        return flow_back, prev, back_points, None
+    cam = fit_camera_motion(points, back_points, reliability > RELIABLE, support=support,
+                            threshold=threshold, min_shift=min_shift)
+    if cam is None:
+        return flow_back, prev, back_points, None
+    flow_m = compensate_flow(flow_back, cam)
+    return (flow_m, stabilize_previous(prev, cam), points + sample_bilinear(flow_m, points),
+            cam)

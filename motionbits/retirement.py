@@ -16,7 +16,15 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["Origin", "moved_evidence"]
+from motionbits.merging import rigid_matrix
+
+__all__ = ["Origin", "moved_evidence", "retire"]
+
+#: px: below this median distance between where a MotionBit's own and the world's
+#: accumulated motions put its pixels, the two cannot be told apart (no verdict).
+MIN_SEPARATION = 2.0
+#: About this many of a MotionBit's pixels measure that distance.
+SEPARATION_SAMPLES = 200
 
 
 @dataclass
@@ -62,7 +70,7 @@ def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
     ys, xs = np.nonzero(mask)
     if len(xs) == 0:
         return np.nan
-    step = max(1, len(xs) // 200)
+    step = max(1, len(xs) // SEPARATION_SAMPLES)
     pts = np.stack([xs[::step], ys[::step], np.ones(len(xs[::step]))]).astype(np.float64)
 
     def apply(m):
@@ -75,3 +83,46 @@ def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
     inside = mask[box]
     return _residual(origin.frame, origin.world, cur_gray, box, inside) - _residual(
         origin.frame, origin.body, cur_gray, box, inside)
+
+
+def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
+           thetas: np.ndarray, trans: np.ndarray, first_new: int, cam: np.ndarray | None,
+           prev_gray: np.ndarray, cur_gray: np.ndarray, margin: float
+           ) -> tuple[np.ndarray, dict[int, Origin]]:
+    """Advance every MotionBit's origin by this frame's motions and retire those whose
+    pixels the static world explains better, by more than ``margin`` grey levels, than
+    their own accumulated motion (:func:`moved_evidence`).
+
+    Args:
+        labels: (H, W) int32 label map of this frame.
+        origins: id -> its :class:`Origin`, from the last frame (the Origins are advanced
+            in place).
+        ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,), ``trans`` (K, 2)
+            (relative to the camera); an id without one moves with the world.
+        first_new: ids from this one on were born now: their origin is ``prev_gray``.
+        cam: (3, 3) camera motion of this frame (current -> previous) or None (static).
+        prev_gray: (H, W) float32 previous grey frame (not stabilised).
+        cur_gray: (H, W) float32 current grey frame.
+        margin: grey levels (config ``retire_margin``).
+
+    Returns:
+        ``labels`` without the retired MotionBits, and the origins of those present.
+    """
+    world = np.eye(3) if cam is None else cam
+    own = {int(i): world @ np.vstack([rigid_matrix(th, t), [0.0, 0.0, 1.0]])
+           for i, th, t in zip(ids, thetas, trans)}
+    present = set(np.unique(labels[labels > 0]).tolist())
+    origins = {i: o for i, o in origins.items() if i in present}
+    out = labels
+    for i in sorted(present):
+        if i >= first_new:
+            origins[i] = Origin(prev_gray, np.eye(3), np.eye(3))
+        origin = origins.get(i)
+        if origin is None:
+            continue
+        origin.advance(own.get(i, world), world)
+        gain = moved_evidence(origin, cur_gray, labels == i, MIN_SEPARATION)
+        if gain < -margin:
+            out = np.where(out == i, 0, out)
+            del origins[i]
+    return out, origins
