@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 
 from motionbits.nodes import NodeGrid
+from motionbits.twists import rigid_matrix
 
 __all__ = ["touching_pairs", "fit_affine", "photometric_residual", "MotionBitGroups",
            "observe_touching"]
@@ -150,12 +151,6 @@ class MotionBitGroups:
                 rep[x] = keep
             members[keep] |= members.pop(drop)
         return rep
-
-
-def rigid_matrix(theta: float, t: np.ndarray) -> np.ndarray:
-    """(2, 3) matrix of the rigid backward motion q = R(theta) p + t."""
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s, t[0]], [s, c, t[1]]], np.float64)
 
 
 def union_excess(labels: np.ndarray, a: int, b: int, motion_a: np.ndarray, motion_b: np.ndarray,

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from motionbits.merging import rigid_matrix
+from motionbits.twists import rigid_matrix
 
 __all__ = ["Origin", "moved_evidence", "retire"]
 

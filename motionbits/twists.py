@@ -19,7 +19,7 @@ import numpy as np
 from scipy import ndimage
 
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
-           "nodes_to_fit", "refine_rigid_motion", "refine_moving_motions"]
+           "rigid_matrix", "nodes_to_fit", "refine_rigid_motion", "refine_moving_motions"]
 
 #: Fast path: a node whose own flow exceeds this fraction of ``move_threshold`` seeds the
 #: set of nodes whose local twist is fitted.
@@ -90,6 +90,12 @@ def se2_log(theta: np.ndarray, t: np.ndarray) -> np.ndarray:
     vx = a * t[..., 0] + half * t[..., 1]
     vy = -half * t[..., 0] + a * t[..., 1]
     return np.stack([theta, vx, vy], -1)
+
+
+def rigid_matrix(theta: float, t: np.ndarray) -> np.ndarray:
+    """(2, 3) matrix of the rigid backward motion q = R(theta) p + t."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s, t[0]], [s, c, t[1]]], np.float64)
 
 
 def se2_exp(twist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
