@@ -106,19 +106,20 @@ def project_past_max(past_max: np.ndarray, neighbors: np.ndarray, source: np.nda
     the nodes nearest to where the edge's endpoints came from.
 
     Args:
-        past_max: (n, k) largest earlier weight of each edge of the previous frame's graph.
+        past_max: (..., n, k) largest earlier weight of each edge of the previous frame's
+            graph (leading axes: several such graphs, projected alike).
         neighbors: (n, k) neighbour indices (the same grid at both frames).
         source: (n,) int index of the node nearest to where each node came from (its
             backward-flow target, e.g. :meth:`motionbits.nodes.NodeGrid.nearest_node`).
 
     Returns:
-        (n, k) float64; 0 where the edge's source endpoints are not neighbours.
+        (..., n, k) float64; 0 where the edge's source endpoints are not neighbours.
     """
     si = source[:, None]
     sj = source[neighbors]
     hit = neighbors[si[:, 0]][:, None, :] == sj[:, :, None]  # (n, k, k)
-    vals = np.where(hit, past_max[si[:, 0]][:, None, :], 0.0)
-    return vals.max(axis=2)
+    vals = np.where(hit, past_max[..., si[:, 0], None, :], 0.0)
+    return vals.max(axis=-1)
 
 
 def apply_temporal_constraints(weights: np.ndarray, neighbors: np.ndarray, history: np.ndarray,

@@ -149,3 +149,12 @@ def test_moving_ids_spans_and_records():
     # the twist of the larger member, forward, in input pixels (2x the working size)
     assert mb.twist == (0.0, 2.0, 0.0)
     assert res.node_labels.shape == (4, 4) and set(res.node_labels.ravel()) == {0, 1}
+
+
+def test_project_past_max_projects_stacked_graphs_alike():
+    grid = NodeGrid.build(60, 60, 6, 4)
+    past = np.random.default_rng(2).uniform(size=(3, *grid.neighbors.shape))
+    src = np.roll(np.arange(grid.n), 7)
+    stacked = project_past_max(past, grid.neighbors, src)
+    for g in range(3):
+        np.testing.assert_array_equal(stacked[g], project_past_max(past[g], grid.neighbors, src))
