@@ -26,6 +26,7 @@ __all__ = [
     "BaseVLM",
     "MissingDependencyError",
     "require",
+    "require_attr",
     "to_rgb_array",
     "to_rgb_frames",
     "to_pil_frames",
@@ -58,6 +59,34 @@ def require(module: str, extra: str, purpose: str = "") -> Any:
         raise MissingDependencyError(
             f"{who} the optional dependency '{module.split('.')[0]}', which is not installed "
             f"or failed to import ({exc}). Install it with: pip install \"motionbits[{extra}]\""
+        ) from exc
+
+
+def require_attr(module: Any, name: str, extra: str, purpose: str = "") -> Any:
+    """``getattr(module, name)`` for a lazily importing package (transformers), with clear errors.
+
+    transformers imports a class's module on first access; when that import fails (e.g.
+    torchvision's compiled ops do not load against the installed torch) it raises
+    ``ModuleNotFoundError: Could not import module '<name>'`` and keeps the real cause in
+    ``__cause__``. This turns both that and a class the installed version lacks into
+    `MissingDependencyError` naming the underlying cause and the extra to install.
+    """
+    who = purpose or "This"
+    package = module.__name__.split(".")[0]
+    try:
+        return getattr(module, name)
+    except AttributeError:
+        version = getattr(module, "__version__", "?")
+        raise MissingDependencyError(
+            f"{who} needs {package}.{name}, which {package} {version} does not have. "
+            f"Upgrade: pip install -U \"motionbits[{extra}]\""
+        ) from None
+    except (ImportError, RuntimeError, OSError) as exc:
+        cause = exc.__cause__ or exc
+        raise MissingDependencyError(
+            f"{who} could not import {package}.{name}: {type(cause).__name__}: {cause}. "
+            f"Repair the install (torch and torchvision must be matching builds): "
+            f"pip install \"motionbits[{extra}]\""
         ) from exc
 
 
