@@ -54,7 +54,7 @@ def require(module: str, extra: str, purpose: str = "") -> Any:
     """
     try:
         return importlib.import_module(module)
-    except ImportError as exc:
+    except (ImportError, RuntimeError, OSError) as exc:  # e.g. torchvision ops built for another torch
         who = f"{purpose} needs" if purpose else "This needs"
         raise MissingDependencyError(
             f"{who} the optional dependency '{module.split('.')[0]}', which is not installed "

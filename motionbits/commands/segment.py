@@ -38,6 +38,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--backend", default=MotionBitsConfig.backend,
                    help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] (default: %(default)s)")
+    p.add_argument("--flow", default=MotionBitsConfig.flow,
+                   help="optical flow: dis-medium, dis-fast, dis-ultrafast, or raft:PATH "
+                        "(torchvision RAFT weights file) (default: %(default)s)")
+    p.add_argument("--refine", choices=("none", "sam2"), default=MotionBitsConfig.refine,
+                   help="refine each frame's masks: sam2 = SAM2 prompted per MotionBit, from --sam2 "
+                        "(default: %(default)s)")
+    p.add_argument("--sam2", metavar="PATH", default="",
+                   help="SAM2 checkpoint folder (transformers format) for --refine sam2")
     p.set_defaults(func=run)
 
 
@@ -62,7 +70,10 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--start must be >= 0, got {args.start}")
     if args.frames is not None and args.frames < 1:
         raise ValueError(f"--frames must be >= 1, got {args.frames}")
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
+    if args.sam2 and args.refine != "sam2":
+        raise ValueError("--sam2 PATH is used only with --refine sam2")
+    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend,
+                              flow=args.flow, refine=args.refine, sam2_path=args.sam2)
     gt = None
     if args.input is None:
         from motionbits.synth import demo_clip
@@ -76,9 +87,10 @@ def run(args: argparse.Namespace) -> int:
     (out / "labels").mkdir(parents=True, exist_ok=True)
 
     seg = MotionBitsSegmenter(config)
+    stages = STAGES if seg.refiner is None else (*STAGES, "refine")
     writer = None
     records: dict[int, dict] = {}
-    stage_ms: dict[str, list[float]] = {s: [] for s in STAGES}
+    stage_ms: dict[str, list[float]] = {s: [] for s in stages}
     frame_ms: list[float] = []
     frames_done = []
     result = None
@@ -101,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
             result = seg.update(frame)
             frame_ms.append(1000 * (time.perf_counter() - t0))
             if result.frame_index > 0:
-                for s in STAGES:
+                for s in stages:
                     stage_ms[s].append(result.timings.get(s, 0.0))
             frames_done.append(i)
             cv2.imwrite(str(out / "labels" / f"{i:05d}.png"), result.labels.astype(np.uint16))
@@ -129,7 +141,8 @@ def run(args: argparse.Namespace) -> int:
         "frame_indices": frames_done,
         "size": list(result.labels.shape),
         "config": {"n_nodes": config.n_nodes, "max_side": config.max_side, "every": args.every,
-                   "start": args.start, "frames": args.frames},
+                   "start": args.start, "frames": args.frames, "flow": config.flow,
+                   "refine": config.refine},
         "motionbits": [dict(r, in_last_frame=r["id"] in final_ids) for r in
                        sorted(records.values(), key=lambda r: r["id"])],
         "timings_ms": {
@@ -138,6 +151,8 @@ def run(args: argparse.Namespace) -> int:
             "total_s": float(sum(frame_ms) / 1000),
         },
     }
+    if seg.refiner is not None:  # refined / rejected masks, with the reasons
+        summary["refinement"] = dict(seg.refiner.totals, method=config.refine)
     if gt is not None:
         summary["demo_ground_truth"] = _ground_truth_scores(result.labels, gt)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
