@@ -38,18 +38,25 @@ class RAFTFlow:
         device: ``"cpu"``, ``"cuda"``, ``"cuda:1"``, a ``torch.device``; default: CUDA when
             available, else CPU.
         architecture: name for ``repr`` (`from_file` sets the one it recognised).
+        threads: torch CPU threads for each call (default: torch's count when this is
+            built). The segmenter runs its small matrix products on one thread; RAFT's
+            convolutions do gain from more, so each call sets this count and restores it.
 
     Frames are (H, W, 3) uint8 RGB; they are scaled to [-1, 1] (RAFT's training input) and
     padded by edge replication to a multiple of 8 of at least 128 px a side; the returned
     (H, W, 2) float32 flow is cropped back to the frame.
     """
 
-    def __init__(self, model: Any, *, iters: int = 12, device: Any = None, architecture: str = "raft") -> None:
+    def __init__(self, model: Any, *, iters: int = 12, device: Any = None, architecture: str = "raft",
+                 threads: int | None = None) -> None:
+        import torch
+
         from vlm_adapters.base import resolve_device
 
         if int(iters) < 1:
             raise ValueError(f"RAFT iters must be >= 1, got {iters}")
         self.iters = int(iters)
+        self.threads = int(threads) if threads is not None else torch.get_num_threads()
         self.architecture = architecture
         self.device = resolve_device(device)
         self.model = model.to(self.device).eval()
@@ -115,9 +122,14 @@ class RAFTFlow:
                              f"{prev.shape} and {nxt.shape}")
         h, w = prev.shape[:2]
         pad = (max(_MIN_SIDE, -(-h // 8) * 8) - h, max(_MIN_SIDE, -(-w // 8) * 8) - w)
-        with torch.inference_mode():
-            flows = self.model(self._to_tensor(prev, pad), self._to_tensor(nxt, pad),
-                               num_flow_updates=self.iters)
+        outer = torch.get_num_threads()
+        torch.set_num_threads(self.threads)
+        try:
+            with torch.inference_mode():
+                flows = self.model(self._to_tensor(prev, pad), self._to_tensor(nxt, pad),
+                                   num_flow_updates=self.iters)
+        finally:
+            torch.set_num_threads(outer)
         return flows[-1][0, :, :h, :w].permute(1, 2, 0).float().cpu().numpy()
 
     def __repr__(self) -> str:

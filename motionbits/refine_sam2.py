@@ -242,7 +242,7 @@ class Sam2Refiner:
             FileNotFoundError: a local path that does not exist.
             MissingDependencyError: torch / transformers missing or failing to import.
         """
-        from vlm_adapters.base import check_local_path, require, require_attr, resolve_device
+        from vlm_adapters.base import MissingDependencyError, check_local_path, require, require_attr, resolve_device
 
         path = check_local_path(path_or_id, what="SAM2 checkpoint")
         transformers = require("transformers", "sam2", "SAM2 refinement")
@@ -252,6 +252,11 @@ class Sam2Refiner:
         try:
             model = model_cls.from_pretrained(path)
             processor = processor_cls.from_pretrained(path)
+        except ImportError as exc:  # e.g. the image processor's torchvision fails to load
+            raise MissingDependencyError(
+                f"SAM2 refinement could not load '{path_or_id}' (a module it needs failed to import): "
+                f"{type(exc.__cause__ or exc).__name__}: {exc.__cause__ or exc}. "
+                f"Repair the install: pip install \"motionbits[sam2]\"") from exc
         except OSError as exc:
             raise OSError(f"could not load a SAM2 checkpoint from '{path_or_id}': {exc}") from exc
         model.to(resolve_device(device)).eval()

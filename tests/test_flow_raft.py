@@ -59,6 +59,21 @@ def test_small_and_odd_frames_are_padded_and_cropped(raft):
         raft(a, b[:, :70])
 
 
+def test_each_call_uses_its_own_thread_count(raft):
+    """The segmenter limits BLAS/OpenMP to one thread around a frame; RAFT takes its own count."""
+    from threadpoolctl import threadpool_limits
+
+    seen = []
+    handle = raft.model.feature_encoder.register_forward_hook(lambda *a: seen.append(torch.get_num_threads()))
+    try:
+        with threadpool_limits(limits=1):
+            raft(*_frames(128, 128))
+            after = torch.get_num_threads()
+    finally:
+        handle.remove()
+    assert seen == [raft.threads] and after == 1
+
+
 def test_make_flow_builds_raft_from_a_spec(raft_file):
     flow = make_flow(f"raft:{raft_file}")
     assert isinstance(flow, RAFTFlow) and flow.iters == 12
@@ -97,3 +112,13 @@ def test_bad_weights_files(tmp_path, capsys):
                  "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "no-such.pth" in err[0]
+
+
+def test_unimportable_torchvision_is_a_missing_dependency(raft_file, monkeypatch):
+    import sys
+
+    from vlm_adapters import MissingDependencyError
+
+    monkeypatch.setitem(sys.modules, "torchvision.models.optical_flow", None)
+    with pytest.raises(MissingDependencyError, match=r"torchvision.*motionbits\[raft\]"):
+        RAFTFlow.from_file(raft_file)

@@ -269,3 +269,14 @@ def test_nothing_heavy_is_imported_unless_asked():
         "assert not heavy and seg.refiner is None, heavy\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_an_unimportable_sam2_class_is_a_missing_dependency(sam2_dir, monkeypatch):
+    """As when torchvision's compiled ops do not load: transformers cannot import the class."""
+    from vlm_adapters import MissingDependencyError
+
+    lazy = sys.modules["transformers"]
+    monkeypatch.delattr(lazy, "Sam2Model", raising=False)
+    monkeypatch.setitem(sys.modules, "transformers.models.sam2.modeling_sam2", None)
+    with pytest.raises(MissingDependencyError, match=r"could not import transformers.Sam2Model.*motionbits\[sam2\]"):
+        Sam2Refiner.from_pretrained(str(sam2_dir))
