@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from motionbits.torch_threads import check_threads, torch_threads
+
 __all__ = ["RAFTFlow", "RAFT_ARCHITECTURES"]
 
 #: torchvision builders tried, in order, for a weights file.
@@ -38,9 +40,10 @@ class RAFTFlow:
         device: ``"cpu"``, ``"cuda"``, ``"cuda:1"``, a ``torch.device``; default: CUDA when
             available, else CPU.
         architecture: name for ``repr`` (`from_file` sets the one it recognised).
-        threads: torch CPU threads for each call (default: torch's count when this is
-            built). The segmenter runs its small matrix products on one thread; RAFT's
-            convolutions do gain from more, so each call sets this count and restores it.
+        threads: torch CPU threads for each call, restored afterwards. Default ``None``
+            keeps the caller's setting: inside `MotionBitsSegmenter.update` that is one
+            thread (on a busy 2-core machine, 2 threads made RAFT 3-10x slower); on an idle
+            many-core CPU pass the core count.
 
     Frames are (H, W, 3) uint8 RGB; they are scaled to [-1, 1] (RAFT's training input) and
     padded by edge replication to a multiple of 8 of at least 128 px a side; the returned
@@ -49,21 +52,22 @@ class RAFTFlow:
 
     def __init__(self, model: Any, *, iters: int = 12, device: Any = None, architecture: str = "raft",
                  threads: int | None = None) -> None:
-        import torch
-
         from vlm_adapters.base import resolve_device
 
         if int(iters) < 1:
             raise ValueError(f"RAFT iters must be >= 1, got {iters}")
         self.iters = int(iters)
-        self.threads = int(threads) if threads is not None else torch.get_num_threads()
+        self.threads = check_threads(threads, "RAFT")
         self.architecture = architecture
         self.device = resolve_device(device)
         self.model = model.to(self.device).eval()
 
     @classmethod
-    def from_file(cls, path: str | os.PathLike, *, iters: int = 12, device: Any = None) -> RAFTFlow:
+    def from_file(cls, path: str | os.PathLike, *, iters: int = 12, device: Any = None,
+                  threads: int | None = None) -> RAFTFlow:
         """Load a RAFT state dict (raft_large or raft_small, recognised from the file).
+
+        `iters`, `device` and `threads`: see the class docstring.
 
         Raises:
             FileNotFoundError: no file at `path`.
@@ -93,7 +97,7 @@ class RAFTFlow:
                 model.load_state_dict(state)
             except RuntimeError:  # missing / unexpected keys or shapes: the other architecture
                 continue
-            return cls(model, iters=iters, device=device, architecture=arch)
+            return cls(model, iters=iters, device=device, architecture=arch, threads=threads)
         raise ValueError(f"RAFT weights file '{path}' fits neither of torchvision's "
                          f"{' / '.join(RAFT_ARCHITECTURES)} architectures")
 
@@ -122,14 +126,9 @@ class RAFTFlow:
                              f"{prev.shape} and {nxt.shape}")
         h, w = prev.shape[:2]
         pad = (max(_MIN_SIDE, -(-h // 8) * 8) - h, max(_MIN_SIDE, -(-w // 8) * 8) - w)
-        outer = torch.get_num_threads()
-        torch.set_num_threads(self.threads)
-        try:
-            with torch.inference_mode():
-                flows = self.model(self._to_tensor(prev, pad), self._to_tensor(nxt, pad),
-                                   num_flow_updates=self.iters)
-        finally:
-            torch.set_num_threads(outer)
+        with torch_threads(self.threads), torch.inference_mode():
+            flows = self.model(self._to_tensor(prev, pad), self._to_tensor(nxt, pad),
+                               num_flow_updates=self.iters)
         return flows[-1][0, :, :h, :w].permute(1, 2, 0).float().cpu().numpy()
 
     def __repr__(self) -> str:

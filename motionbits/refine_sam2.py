@@ -43,6 +43,8 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.torch_threads import check_threads, torch_threads
+
 if TYPE_CHECKING:  # pragma: no cover
     from motionbits.segmenter import MotionBitsResult
 
@@ -214,6 +216,9 @@ class Sam2Refiner:
         min_iou: reject a refined mask whose IoU with the motion mask is below this.
         max_outside: reject a refined mask with more than this fraction of its pixels on
             static background beyond ``BAND_CELLS`` grid cells of the motion mask.
+        threads: torch CPU threads for the model call. Default ``None`` keeps the caller's
+            count: one inside `MotionBitsSegmenter.update` (on a busy 2-core machine, two
+            threads made SAM2 2-10x slower); on an idle many-core CPU pass the core count.
 
     Attributes:
         totals: counts over all frames refined so far: ``frames``, ``prompted``,
@@ -223,7 +228,9 @@ class Sam2Refiner:
     Use `from_pretrained` to load a checkpoint folder.
     """
 
-    def __init__(self, model: Any, processor: Any, *, min_iou: float = 0.5, max_outside: float = 0.1) -> None:
+    def __init__(self, model: Any, processor: Any, *, min_iou: float = 0.5, max_outside: float = 0.1,
+                 threads: int | None = None) -> None:
+        self.threads = check_threads(threads, "SAM2")
         self.model = model
         self.processor = processor
         self.min_iou = float(min_iou)
@@ -236,7 +243,7 @@ class Sam2Refiner:
     def from_pretrained(cls, path_or_id: str | os.PathLike, *, device: Any = None, **kwargs: Any) -> Sam2Refiner:
         """Load ``Sam2Model`` + ``Sam2Processor`` from a local folder (or a reachable hub id).
 
-        `kwargs` go to the constructor (`min_iou`, `max_outside`).
+        `kwargs` go to the constructor (`min_iou`, `max_outside`, `threads`).
 
         Raises:
             FileNotFoundError: a local path that does not exist.
@@ -289,7 +296,7 @@ class Sam2Refiner:
         device = next(self.model.parameters()).device
         inputs = inputs.to(device)
         inputs["pixel_values"] = inputs["pixel_values"].to(self.model.dtype)
-        with torch.inference_mode():
+        with torch_threads(self.threads), torch.inference_mode():
             out = self.model(pixel_values=inputs["pixel_values"], input_points=inputs["input_points"],
                              input_labels=inputs["input_labels"], input_boxes=inputs["input_boxes"],
                              multimask_output=False)

@@ -128,12 +128,12 @@ class MotionBitsSegmenter:
         self.config = config or MotionBitsConfig()
         self.flow = make_flow(flow if flow is not None else self.config.flow)
         self._ops = make_ops(self.config.backend)  # twist fits, propagation, MCL
-        self._threads = ThreadpoolController()  # after make_ops: sees torch's OpenMP too
         self.refiner = None  # optional post-step on each frame's labels (config.refine)
         if self.config.refine == "sam2":  # imports torch + transformers only now
             from motionbits.refine_sam2 import Sam2Refiner
 
             self.refiner = Sam2Refiner.from_config(self.config)
+        self._threads = ThreadpoolController()  # after make_ops, the refiner: sees torch's OpenMP too
         self.reset()
 
     def reset(self) -> None:
@@ -203,7 +203,7 @@ class MotionBitsSegmenter:
         # multiplies their cost on a busy CPU. OpenCV's own thread pool is not affected.
         with self._threads.limit(limits=1):
             result = self._update(frame)
-        return result if self.refiner is None else self.refiner.apply(frame, result)
+            return result if self.refiner is None else self.refiner.apply(frame, result)
 
     def _update(self, frame: np.ndarray) -> MotionBitsResult:
         frame = as_rgb_frame(frame, name=f"frame {self.frame_index + 1}")

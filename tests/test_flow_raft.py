@@ -59,19 +59,21 @@ def test_small_and_odd_frames_are_padded_and_cropped(raft):
         raft(a, b[:, :70])
 
 
-def test_each_call_uses_its_own_thread_count(raft):
-    """The segmenter limits BLAS/OpenMP to one thread around a frame; RAFT takes its own count."""
+@pytest.mark.parametrize("threads", [None, 2])
+def test_thread_count_of_a_call(raft_file, threads):
+    """Inside the segmenter's one-thread limit RAFT keeps it, unless given its own count."""
     from threadpoolctl import threadpool_limits
 
+    flow = RAFTFlow.from_file(raft_file, iters=1, device="cpu", threads=threads)
     seen = []
-    handle = raft.model.feature_encoder.register_forward_hook(lambda *a: seen.append(torch.get_num_threads()))
+    handle = flow.model.feature_encoder.register_forward_hook(lambda *a: seen.append(torch.get_num_threads()))
     try:
         with threadpool_limits(limits=1):
-            raft(*_frames(128, 128))
+            flow(*_frames(128, 128))
             after = torch.get_num_threads()
     finally:
         handle.remove()
-    assert seen == [raft.threads] and after == 1
+    assert seen == [threads or 1] and after == 1
 
 
 def test_make_flow_builds_raft_from_a_spec(raft_file):
