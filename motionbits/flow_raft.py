@@ -74,7 +74,7 @@ class RAFTFlow:
             MissingDependencyError: torch / torchvision missing or failing to import.
             ValueError: the file is not a state dict of either architecture.
         """
-        from vlm_adapters.base import require
+        from motionbits.objects import require
 
         path = os.path.expanduser(os.fspath(path))
         if not os.path.isfile(path):

@@ -249,7 +249,8 @@ class Sam2Refiner:
             FileNotFoundError: a local path that does not exist.
             MissingDependencyError: torch / transformers missing or failing to import.
         """
-        from vlm_adapters.base import MissingDependencyError, check_local_path, require, require_attr, resolve_device
+        from motionbits.objects import MissingDependencyError, require, require_attr
+        from vlm_adapters.base import check_local_path, resolve_device
 
         path = check_local_path(path_or_id, what="SAM2 checkpoint")
         transformers = require("transformers", "sam2", "SAM2 refinement")
