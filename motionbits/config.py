@@ -95,6 +95,9 @@ class MotionBitsConfig:
     # some frame), and different bodies for good once it is worse by merge_disagree
     merge_agree: float = 1.5
     merge_disagree: float = 6.0
+    # ours (motionbits/retirement.py): a MotionBit is retired when the static world explains
+    # its pixels better, by this many grey levels, than its own motion since its birth
+    retire_margin: float = 5.0
 
     # --- optional learned refinement (paper Sec. 5.3: SAM2 prompted per MotionBit) ---
     # "none" (default) or "sam2": each frame's masks are refined by SAM2 from `sam2_path`
@@ -140,6 +143,7 @@ class MotionBitsConfig:
             "match_iou": 0.0 <= self.match_iou <= 1.0,
             "merge_agree": self.merge_agree >= 0,
             "merge_disagree": self.merge_disagree >= self.merge_agree,
+            "retire_margin": self.retire_margin >= 0,
             "refine_min_iou": 0.0 <= self.refine_min_iou <= 1.0,
             "refine_max_outside": 0.0 <= self.refine_max_outside <= 1.0,
         }
