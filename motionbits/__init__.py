@@ -36,6 +36,9 @@ _LAZY: dict[str, str] = {
     "GraspProposal": "motionbits.grasp",
     "grasp_from_mask": "motionbits.grasp",
     "grasp_proposals": "motionbits.grasp",
+    # learned options from local weights (torch etc. imported only when they are built)
+    "Sam2Refiner": "motionbits.refine_sam2",
+    "RAFTFlow": "motionbits.flow_raft",
 }
 
 __all__ = [
@@ -46,6 +49,9 @@ __all__ = [
     "MotionBitsSegmenter",
     "iter_frames",
     "segment_video",
+    # learned options: SAM2 refinement, RAFT flow (loaded on first use)
+    "RAFTFlow",
+    "Sam2Refiner",
     # the object type and helpers shared with somprompt and vlm_adapters
     "Instance",
     "MissingDependencyError",
@@ -85,3 +91,5 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs (names are in
         MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video)
     from motionbits.grasp import GraspProposal, grasp_from_mask, grasp_proposals  # noqa: F401
     from motionbits.video import iter_frames  # noqa: F401
+    from motionbits.flow_raft import RAFTFlow  # noqa: F401
+    from motionbits.refine_sam2 import Sam2Refiner  # noqa: F401

@@ -99,6 +99,15 @@ class MotionBitsConfig:
     # its pixels better, by this many grey levels, than its own motion since its birth
     retire_margin: float = 5.0
 
+    # --- optional learned refinement (paper Sec. 5.3: SAM2 prompted per MotionBit) ---
+    # "none" (default) or "sam2": each frame's masks are refined by SAM2 from `sam2_path`
+    # (motionbits/refine_sam2.py; needs torch + transformers, imported only then)
+    refine: str = "none"
+    sam2_path: str = ""  # SAM2 checkpoint folder (transformers format) or a reachable hub id
+    refine_min_iou: float = 0.5  # ours: a refined mask must overlap its motion mask this much
+    # ours: ... and have at most this fraction on static background away from the motion mask
+    refine_max_outside: float = 0.1
+
     def __post_init__(self) -> None:
         if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
             raise ValueError(f"invalid MotionBitsConfig backend {self.backend!r}; choose one of "
@@ -135,11 +144,17 @@ class MotionBitsConfig:
             "merge_agree": self.merge_agree >= 0,
             "merge_disagree": self.merge_disagree >= self.merge_agree,
             "retire_margin": self.retire_margin >= 0,
+            "refine_min_iou": 0.0 <= self.refine_min_iou <= 1.0,
+            "refine_max_outside": 0.0 <= self.refine_max_outside <= 1.0,
         }
         bad = [name for name, ok in checks.items() if not ok]
         if bad:
             values = ", ".join(f"{name}={getattr(self, name)!r}" for name in bad)
             raise ValueError(f"invalid MotionBitsConfig value(s): {values}")
+        if self.refine not in ("none", "sam2"):
+            raise ValueError(f"invalid MotionBitsConfig refine {self.refine!r}; choose 'none' or 'sam2'")
+        if self.refine == "sam2" and not self.sam2_path:
+            raise ValueError("MotionBitsConfig(refine='sam2') needs sam2_path: a SAM2 checkpoint folder")
 
     @property
     def grid_side(self) -> int:

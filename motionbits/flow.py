@@ -2,8 +2,9 @@
 
 A flow backend is any callable ``flow(prev, next) -> (H, W, 2) float32`` taking two
 (H, W, 3) uint8 RGB frames and returning, for each pixel of ``prev``, its displacement
-(dx, dy) to ``next``. The default is OpenCV's DIS (no weights); any other model (RAFT,
-MemFlow, ...) plugs in through the same signature.
+(dx, dy) to ``next``. The default is OpenCV's DIS (no weights); RAFT from a local
+weights file is built in (``"raft:PATH"``, motionbits/flow_raft.py), and any other model
+(MemFlow, ...) plugs in through the same signature.
 """
 
 from __future__ import annotations
@@ -64,15 +65,24 @@ class DISFlow:
 
 
 def make_flow(spec: str | FlowBackend) -> FlowBackend:
-    """Build a flow backend from a name (``"dis-medium"``, ``"dis-fast"``, ...) or pass one through."""
+    """Build a flow backend from a name or pass a callable through.
+
+    Names: ``"dis-medium"``, ``"dis-fast"``, ``"dis-ultrafast"`` (OpenCV DIS, no weights);
+    ``"raft:PATH"``: torchvision's RAFT from a local weights file
+    (:class:`motionbits.flow_raft.RAFTFlow`; needs torch and torchvision, imported only then).
+    """
     if callable(spec):
         return spec
     name = str(spec).lower()
     if name.startswith("dis-"):
         return DISFlow(name[4:])
+    if name.startswith("raft:"):
+        from motionbits.flow_raft import RAFTFlow
+
+        return RAFTFlow.from_spec(str(spec))
     raise ValueError(
-        f"unknown flow backend {spec!r}: use 'dis-medium', 'dis-fast', 'dis-ultrafast' "
-        "or pass a callable flow(prev, next) -> (H, W, 2) array"
+        f"unknown flow backend {spec!r}: use 'dis-medium', 'dis-fast', 'dis-ultrafast', "
+        "'raft:PATH' (RAFT weights file) or pass a callable flow(prev, next) -> (H, W, 2) array"
     )
 
 

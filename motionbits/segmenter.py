@@ -71,6 +71,10 @@ class MotionBitsSegmenter:
         config: parameters; defaults are the paper's.
         flow: a flow backend ``flow(prev, next) -> (H, W, 2)``; default from ``config.flow``.
 
+    With ``config.refine="sam2"`` every result's labels are refined by SAM2 after the
+    frame is segmented (``self.refiner``, :mod:`motionbits.refine_sam2`); the segmenter's
+    own state keeps the motion masks.
+
     Example:
         >>> from motionbits import MotionBitsSegmenter
         >>> from motionbits.synth import demo_clip
@@ -86,7 +90,12 @@ class MotionBitsSegmenter:
         self.config = config or MotionBitsConfig()
         self.flow = make_flow(flow if flow is not None else self.config.flow)
         self._ops = make_ops(self.config.backend)  # twist fits, propagation, MCL
-        self._threads = ThreadpoolController()  # after make_ops: sees torch's OpenMP too
+        self.refiner = None  # optional post-step on each frame's labels (config.refine)
+        if self.config.refine == "sam2":  # imports torch + transformers only now
+            from motionbits.refine_sam2 import Sam2Refiner
+
+            self.refiner = Sam2Refiner.from_config(self.config)
+        self._threads = ThreadpoolController()  # after make_ops, the refiner: sees torch's OpenMP too
         self.reset()
 
     def reset(self) -> None:
@@ -174,7 +183,8 @@ class MotionBitsSegmenter:
         # threads (numpy, scipy, torch on the CPU) only add hand-off and spin-waiting, which
         # multiplies their cost on a busy CPU. OpenCV's own thread pool is not affected.
         with self._threads.limit(limits=1):
-            return self._update(frame)
+            result = self._update(frame)
+            return result if self.refiner is None else self.refiner.apply(frame, result)
 
     def _update(self, frame: np.ndarray) -> MotionBitsResult:
         frame = as_rgb_frame(frame, name=f"frame {self.frame_index + 1}")

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, Protocol, Union, runtime_checkable
 import numpy as np
 
 from motionbits.frames import as_rgb_array, sample_frame_indices
-from motionbits.objects import MissingDependencyError, require
+from motionbits.objects import MissingDependencyError, require, require_attr
 
 if TYPE_CHECKING:  # pragma: no cover
     from PIL import Image
@@ -28,6 +28,7 @@ __all__ = [
     "BaseVLM",
     "MissingDependencyError",
     "require",
+    "require_attr",
     "to_rgb_frames",
     "to_pil_frames",
     "sample_frames",

@@ -47,6 +47,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--backend",
                    help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] "
                         f"(default: {MotionBitsConfig.backend})")
+    p.add_argument("--flow",
+                   help="optical flow: dis-medium, dis-fast, dis-ultrafast, or raft:PATH "
+                        f"(torchvision RAFT weights file) (default: {MotionBitsConfig.flow})")
+    p.add_argument("--refine", choices=("none", "sam2"),
+                   help="refine each frame's masks: sam2 = SAM2 prompted per MotionBit, from --sam2 "
+                        f"(default: {MotionBitsConfig.refine})")
+    p.add_argument("--sam2", metavar="PATH",
+                   help="SAM2 checkpoint folder (transformers format) for --refine sam2")
     p.set_defaults(func=run)
 
 
@@ -72,8 +80,11 @@ def run(args: argparse.Namespace) -> int:
     if args.frames is not None and args.frames < 1:
         raise ValueError(f"--frames must be >= 1, got {args.frames}")
     flags = {k: v for k, v in (("n_nodes", args.nodes), ("max_side", args.max_side),
-                                ("backend", args.backend)) if v is not None}
+                                ("backend", args.backend), ("flow", args.flow),
+                                ("refine", args.refine), ("sam2_path", args.sam2)) if v is not None}
     config = load_config(args.config, **flags) if args.config else config_from_dict(flags, source="options")
+    if args.sam2 and config.refine != "sam2":
+        raise ValueError("--sam2 PATH is used only with --refine sam2")
     gt = None
     if args.input is None:
         from motionbits.synth import demo_clip
@@ -89,12 +100,14 @@ def run(args: argparse.Namespace) -> int:
     from somprompt import MarkRegistry, SetOfMarkRenderer  # the command draws marks; the library does not
 
     seg = MotionBitsSegmenter(config)
+    seg = MotionBitsSegmenter(config)
+    stages = STAGES if seg.refiner is None else (*STAGES, "refine")
     # somprompt's numbered marks and palette: one id, one number and one colour in the
     # overlay, the marks pictures and the demos
     renderer, registry = SetOfMarkRenderer(), MarkRegistry()
     writer = H264Writer(out / "overlay.mp4", args.fps)
     records: dict[int, dict] = {}
-    stage_ms: dict[str, list[float]] = {s: [] for s in STAGES}
+    stage_ms: dict[str, list[float]] = {s: [] for s in stages}
     frame_ms: list[float] = []
     frames_done = []
     result = None
@@ -117,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
             result = seg.update(frame)
             frame_ms.append(1000 * (time.perf_counter() - t0))
             if result.frame_index > 0:
-                for s in STAGES:
+                for s in stages:
                     stage_ms[s].append(result.timings.get(s, 0.0))
             frames_done.append(i)
             cv2.imwrite(str(out / "labels" / f"{i:05d}.png"), result.labels.astype(np.uint16))
@@ -152,6 +165,8 @@ def run(args: argparse.Namespace) -> int:
             "total_s": float(sum(frame_ms) / 1000),
         },
     }
+    if seg.refiner is not None:  # refined / rejected masks, with the reasons
+        summary["refinement"] = dict(seg.refiner.totals, method=config.refine)
     if gt is not None:
         summary["demo_ground_truth"] = _ground_truth_scores(result.labels, gt)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
