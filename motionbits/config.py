@@ -8,13 +8,60 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
+from numbers import Integral, Real
 
 __all__ = ["BACKENDS", "MotionBitsConfig"]
 
 #: Accepted values of ``MotionBitsConfig.backend``.
 BACKENDS = ("numpy", "torch", "torch:cpu", "torch:cuda", "torch:cuda:N")
 _BACKEND_RE = re.compile(r"numpy|torch(:cpu|:cuda(:\d+)?)?")
+
+# annotation -> (what the error message calls it, test); bool is no int here, an int is a float
+_FIELD_TYPES = {
+    "bool": ("True or False", lambda v: isinstance(v, bool)),
+    "int": ("an integer", lambda v: isinstance(v, Integral) and not isinstance(v, bool)),
+    "float": ("a number", lambda v: isinstance(v, Real) and not isinstance(v, bool)),
+    "str": ("a string", lambda v: isinstance(v, str)),
+}
+
+#: Allowed values of the numeric fields, as intervals ("inf" = no upper bound).
+_RANGES = {
+    "n_nodes": "[16, 4000000]",
+    "k_neighbors": "[1, 24]",
+    "max_side": "[32, 16384]",
+    "seed_fraction": "(0, 1]",
+    "propagation_iters": "[1, inf)",
+    "reseed_every": "[1, inf)",
+    "mcl_expansion": "[2, inf)",
+    "mcl_inflation": "(1, inf)",
+    "mcl_max_iters": "[1, inf)",
+    "mcl_stable_iters": "[1, inf)",
+    "mcl_prune": "[0, inf)",
+    "mcl_max_items": "[16, inf)",
+    "ransac_threshold": "(0, inf)",
+    "fb_sigma": "(0, inf)",
+    "flow_noise": "(0, inf)",
+    "move_threshold": "(0, inf)",
+    "motion_evidence": "[0, inf)",
+    "camera_support": "(0, 1]",
+    "camera_threshold": "(0, inf)",
+    "camera_min_shift": "[0, inf)",
+    "min_cluster_nodes": "[1, inf)",
+    "prior_bonus": "[0, inf)",
+    "photo_weight": "[0, inf)",
+    "match_iou": "[0, 1]",
+}
+
+
+def _in_range(value: float, interval: str) -> bool:
+    """Whether ``value`` lies in an interval written like ``"(0, 1]"`` or ``"[16, inf)"``."""
+    lo, hi = (float(v) for v in interval[1:-1].split(","))
+    if value != value:  # NaN is in no interval
+        return False
+    above = value > lo if interval[0] == "(" else value >= lo
+    below = value < hi if interval[-1] == ")" else value <= hi
+    return above and below
 
 
 @dataclass(frozen=True)
@@ -79,39 +126,20 @@ class MotionBitsConfig:
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
 
     def __post_init__(self) -> None:
-        if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
+        # Generic over the fields, so a new field is checked without touching this method:
+        # its type comes from its annotation, its range (if any) from ``_RANGES``.
+        for f in fields(self):
+            value = getattr(self, f.name)
+            kind = _FIELD_TYPES.get(f.type if isinstance(f.type, str) else f.type.__name__)
+            if kind is not None and not kind[1](value):
+                raise TypeError(f"MotionBitsConfig.{f.name} must be {kind[0]}, got "
+                                f"{type(value).__name__} {value!r}")
+            if f.name in _RANGES and not _in_range(value, _RANGES[f.name]):
+                raise ValueError(f"MotionBitsConfig.{f.name} must be in {_RANGES[f.name]}, "
+                                 f"got {value!r}")
+        if not _BACKEND_RE.fullmatch(self.backend):
             raise ValueError(f"invalid MotionBitsConfig backend {self.backend!r}; choose one of "
                              + ", ".join(repr(b) for b in BACKENDS) + " (N = GPU index)")
-        checks = {
-            "n_nodes": self.n_nodes >= 16,
-            "k_neighbors": 1 <= self.k_neighbors <= 24,
-            "max_side": self.max_side >= 32,
-            "seed_fraction": 0.0 < self.seed_fraction <= 1.0,
-            "propagation_iters": self.propagation_iters >= 1,
-            "reseed_every": self.reseed_every >= 1,
-            "mcl_expansion": self.mcl_expansion >= 2,
-            "mcl_inflation": self.mcl_inflation > 1.0,
-            "mcl_max_iters": self.mcl_max_iters >= 1,
-            "mcl_stable_iters": self.mcl_stable_iters >= 1,
-            "mcl_prune": self.mcl_prune >= 0.0,
-            "mcl_max_items": self.mcl_max_items >= 16,
-            "ransac_threshold": self.ransac_threshold > 0,
-            "fb_sigma": self.fb_sigma > 0,
-            "flow_noise": self.flow_noise > 0,
-            "move_threshold": self.move_threshold > 0,
-            "motion_evidence": self.motion_evidence >= 0,
-            "camera_support": 0.0 < self.camera_support <= 1.0,
-            "camera_threshold": self.camera_threshold > 0,
-            "camera_min_shift": self.camera_min_shift >= 0,
-            "min_cluster_nodes": self.min_cluster_nodes >= 1,
-            "prior_bonus": self.prior_bonus >= 0,
-            "photo_weight": self.photo_weight >= 0,
-            "match_iou": 0.0 <= self.match_iou <= 1.0,
-        }
-        bad = [name for name, ok in checks.items() if not ok]
-        if bad:
-            values = ", ".join(f"{name}={getattr(self, name)!r}" for name in bad)
-            raise ValueError(f"invalid MotionBitsConfig value(s): {values}")
 
     @property
     def grid_side(self) -> int:

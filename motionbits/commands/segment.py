@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
+import math
+import sys
 import time
 from pathlib import Path
 
@@ -12,9 +15,14 @@ import numpy as np
 from tqdm import tqdm
 
 from motionbits.config import MotionBitsConfig
+from motionbits.errors import InputError
+from motionbits.outputs import StagedFolder
 from motionbits.overlay import overlay_labels
 from motionbits.segmenter import STAGES, MotionBitsSegmenter
 from motionbits.video import count_frames, iter_frames
+
+#: What ``segment`` writes into ``--out`` (``--overwrite`` replaces only such a folder).
+OUTPUTS = {"labels", "overlay.mp4", "summary.json"}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -38,6 +46,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--backend", default=MotionBitsConfig.backend,
                    help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] (default: %(default)s)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing --out folder of an earlier run (default: refuse)")
+    p.add_argument("--strict", action="store_true",
+                   help="fail if a video decodes fewer frames than its header says "
+                        "(default: a warning, and both counts in summary.json)")
     p.set_defaults(func=run)
 
 
@@ -55,14 +68,34 @@ def _ground_truth_scores(pred: np.ndarray, gt: np.ndarray) -> dict:
     return {"bodies": scores, "background_precision": precision}
 
 
-def run(args: argparse.Namespace) -> int:
+def _check_options(args: argparse.Namespace) -> MotionBitsConfig:
+    """Every option check that needs no work; returns the segmenter config."""
     if args.every < 1:
-        raise ValueError(f"--every must be >= 1, got {args.every}")
+        raise InputError(f"--every must be >= 1, got {args.every}")
     if args.start < 0:
-        raise ValueError(f"--start must be >= 0, got {args.start}")
+        raise InputError(f"--start must be >= 0, got {args.start}")
     if args.frames is not None and args.frames < 1:
-        raise ValueError(f"--frames must be >= 1, got {args.frames}")
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
+        raise InputError(f"--frames must be >= 1, got {args.frames}")
+    if not (math.isfinite(args.fps) and args.fps > 0):
+        raise InputError(f"--fps must be a positive number, got {args.fps:g}")
+    try:
+        return MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
+    except (TypeError, ValueError) as exc:  # name the option, not the config field
+        msg = str(exc).replace("MotionBitsConfig.n_nodes", "--nodes").replace(
+            "MotionBitsConfig.max_side", "--max-side")
+        raise InputError(msg) from None
+
+
+def _build_segmenter(config: MotionBitsConfig) -> MotionBitsSegmenter:
+    try:
+        return MotionBitsSegmenter(config)
+    except RuntimeError as exc:  # e.g. --backend torch:cuda without a GPU
+        raise InputError(f"--backend {config.backend}: {exc}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    config = _check_options(args)
+    seg = _build_segmenter(config)  # a missing extra (torch) fails here
     gt = None
     if args.input is None:
         from motionbits.synth import demo_clip
@@ -72,31 +105,51 @@ def run(args: argparse.Namespace) -> int:
         source, total, gt = clip.frames, len(clip.frames), clip.gt
     else:
         source, total = args.input, count_frames(args.input)
+    frames = iter_frames(source)
+    first = next(frames)  # a missing, empty or unreadable input fails here, before any output
+    frames = itertools.chain([first], frames)
+    # index of the last frame to use (the frame count of some videos is unknown: None)
+    last = float("inf") if args.frames is None else args.start + args.every * (args.frames - 1)
+    if total is not None:
+        if args.start >= total:
+            raise InputError(f"--start {args.start} is past the last frame ({total} frames)")
+        last = min(last, total - 1)
+    with StagedFolder(args.out, overwrite=args.overwrite, replaceable=OUTPUTS) as staged:
+        summary = _segment(args, seg, frames, total, last, staged.path, gt)
+        staged.publish()
     out = Path(args.out)
-    (out / "labels").mkdir(parents=True, exist_ok=True)
+    print(f"{summary['motionbits_in_last_frame']} MotionBits in the last frame; "
+          f"{summary['frames']} frames in {summary['timings_ms']['total_s']:.1f} s "
+          f"(median {summary['timings_ms']['per_frame_median']:.0f} ms/frame)")
+    if gt is not None:
+        scores = summary["demo_ground_truth"]
+        ious = ", ".join(f"{g}: {s['iou']:.2f}" for g, s in scores["bodies"].items())
+        print(f"demo ground truth: IoU per body {{{ious}}}, "
+              f"background precision {scores['background_precision']:.3f}")
+    print(f"wrote {out}/labels/*.png, {out}/overlay.mp4, {out}/summary.json")
+    return 0
 
-    seg = MotionBitsSegmenter(config)
+
+def _segment(args, seg, frames, total, last, out: Path, gt) -> dict:
+    """Segment the chosen frames into ``out``; returns the summary (also written there)."""
+    config = seg.config
+    (out / "labels").mkdir()
     writer = None
     records: dict[int, dict] = {}
     stage_ms: dict[str, list[float]] = {s: [] for s in STAGES}
     frame_ms: list[float] = []
     frames_done = []
     result = None
-    # index of the last frame to use (the frame count of some videos is unknown: None)
-    last = float("inf") if args.frames is None else args.start + args.every * (args.frames - 1)
-    if total is not None:
-        if args.start >= total:
-            raise ValueError(f"--start {args.start} is past the last frame ({total} frames)")
-        last = min(last, total - 1)
+    decoded = 0  # frames read from the input
     bar = tqdm(total=None if last == float("inf") else (last - args.start) // args.every + 1,
-               unit="frame", disable=args.quiet, desc="segment")
+               unit="frame", disable=True if args.quiet else None, desc="segment")
     try:
-        for i, frame in enumerate(iter_frames(source)):
+        for i, frame in enumerate(frames):
             if i > last:
                 break
+            decoded = i + 1
             if i < args.start or (i - args.start) % args.every:
                 continue
-            bar.update(1)
             t0 = time.perf_counter()
             result = seg.update(frame)
             frame_ms.append(1000 * (time.perf_counter() - t0))
@@ -104,28 +157,46 @@ def run(args: argparse.Namespace) -> int:
                 for s in STAGES:
                     stage_ms[s].append(result.timings.get(s, 0.0))
             frames_done.append(i)
-            cv2.imwrite(str(out / "labels" / f"{i:05d}.png"), result.labels.astype(np.uint16))
+            label_file = out / "labels" / f"{i:05d}.png"
+            if not cv2.imwrite(str(label_file), result.labels.astype(np.uint16)):
+                raise OSError(f"could not write {label_file}")
             vis = cv2.cvtColor(overlay_labels(frame, result.labels), cv2.COLOR_RGB2BGR)
             if writer is None:
                 h, w = vis.shape[:2]
                 writer = cv2.VideoWriter(str(out / "overlay.mp4"), cv2.VideoWriter_fourcc(*"mp4v"),
                                          args.fps, (w, h))
+                if not writer.isOpened():
+                    raise OSError(f"could not open {out / 'overlay.mp4'} for writing")
             writer.write(vis)
+            bar.update(1)
             for mb in result.motionbits:
                 rec = records.setdefault(mb.id, {"id": mb.id})
                 rec.update(area=mb.area, bbox=list(mb.bbox), centroid=list(mb.centroid),
                            first_moved=mb.first_moved, last_moved=mb.last_moved,
                            last_seen=result.frame_index)
+        else:  # the input ran out before --frames / --start asked it to
+            if total is not None and decoded < total:
+                msg = (f"{args.input}: the header says {total} frames but only {decoded} could "
+                       "be decoded (truncated or corrupt file)")
+                if args.strict:
+                    raise InputError(msg)
+                tqdm.write(f"motionbits segment: warning: {msg}; --strict makes this an error",
+                           file=sys.stderr)
+            if result is None:
+                raise InputError(f"--start {args.start} is past the last frame of {args.input} "
+                                 f"({decoded} frames decoded)")
+    except BaseException:
+        bar.leave = False  # no stale progress bar above the error message
+        raise
     finally:
         bar.close()
         if writer is not None:
             writer.release()
-    if result is None:
-        raise ValueError("the input holds no frames")
     final_ids = set(result.ids)
     summary = {
         "input": args.input or "built-in demo clip",
         "frames": len(frames_done),
+        "input_frames": {"expected": total, "decoded": decoded},
         "frame_indices": frames_done,
         "size": list(result.labels.shape),
         "config": {"n_nodes": config.n_nodes, "max_side": config.max_side, "every": args.every,
@@ -138,16 +209,8 @@ def run(args: argparse.Namespace) -> int:
             "total_s": float(sum(frame_ms) / 1000),
         },
     }
+    summary["motionbits_in_last_frame"] = len(final_ids)
     if gt is not None:
         summary["demo_ground_truth"] = _ground_truth_scores(result.labels, gt)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    print(f"{len(final_ids)} MotionBits in the last frame; {len(frames_done)} frames in "
-          f"{summary['timings_ms']['total_s']:.1f} s "
-          f"(median {summary['timings_ms']['per_frame_median']:.0f} ms/frame)")
-    if gt is not None:
-        scores = summary["demo_ground_truth"]
-        ious = ", ".join(f"{g}: {s['iou']:.2f}" for g, s in scores["bodies"].items())
-        print(f"demo ground truth: IoU per body {{{ious}}}, "
-              f"background precision {scores['background_precision']:.3f}")
-    print(f"wrote {out}/labels/*.png, {out}/overlay.mp4, {out}/summary.json")
-    return 0
+    return summary
