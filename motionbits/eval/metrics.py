@@ -40,8 +40,8 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.eval.boundary import boundary_map, boundary_tolerance, disk, pair_boundary_hits
-from motionbits.eval.matching import hungarian_match
-from motionbits.eval.overlap import contingency, overlap_scores
+from motionbits.eval.matching import sparse_hungarian_match
+from motionbits.eval.overlap import contingency, pair_scores
 
 __all__ = ["FrameScores", "evaluate_frame", "summarize", "METRIC_KEYS", "INSTANCE_KEYS"]
 
@@ -148,16 +148,17 @@ def evaluate_frame(
     pred = np.asarray(pred).astype(np.int64, copy=False)
     gt = np.asarray(gt).astype(np.int64, copy=False)
     k, m = c.gt_ids.size, c.pred_ids.size
-    sc = overlap_scores(c)
-    rows, cols = hungarian_match(sc["F"])
+    sc = pair_scores(c)  # only pairs that share a pixel: bounded by the image size
+    rows, cols = sparse_hungarian_match(k, m, sc["gt"], sc["pred"], sc["F"])
+    pair = _pair_index(sc, m, rows, cols)
 
     zeros = lambda: np.zeros(k, np.float64)  # noqa: E731
     iou, prec, rec, f1, bprec, brec = zeros(), zeros(), zeros(), zeros(), zeros(), zeros()
     matched = np.zeros(k, np.int64)
-    iou[rows] = sc["IoU"][rows, cols]
-    prec[rows] = sc["P"][rows, cols]
-    rec[rows] = sc["R"][rows, cols]
-    f1[rows] = sc["F"][rows, cols]
+    iou[rows] = sc["IoU"][pair]
+    prec[rows] = sc["P"][pair]
+    rec[rows] = sc["R"][pair]
+    f1[rows] = sc["F"][pair]
     matched[rows] = c.pred_ids[cols]
 
     # Boundaries on the full maps, then ignored pixels dropped.
@@ -186,7 +187,7 @@ def evaluate_frame(
 
     pooled = _pooled_edge_case(k, m)
     if pooled is None:
-        tp = float(c.tp[rows, cols].sum())
+        tp = float(sc["tp"][pair].sum())
         p_all = tp / float(c.pred_sizes.sum())
         r_all = tp / float(c.gt_sizes.sum())
         bp_all = hits_p.sum() / nb_pred.sum() if nb_pred.sum() else 1.0
@@ -201,6 +202,12 @@ def evaluate_frame(
         recall=rec, f1=f1, bprecision=bprec, brecall=brec, bf1=bf1,
         pooled={key: float(v) for key, v in pooled.items()},
     )
+
+
+def _pair_index(sc: dict[str, np.ndarray], m: int, rows: np.ndarray,
+                cols: np.ndarray) -> np.ndarray:
+    """Positions in ``pair_scores`` arrays (sorted by (gt, pred)) of the pairs (rows, cols)."""
+    return np.searchsorted(sc["gt"] * m + sc["pred"], rows * m + cols)
 
 
 def _index_map(labels: np.ndarray, ids: np.ndarray, keep: np.ndarray) -> np.ndarray:
