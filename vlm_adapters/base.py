@@ -64,26 +64,51 @@ def require(module: str, extra: str, purpose: str = "") -> Any:
 # --------------------------------------------------------------------------- frames
 
 
-def to_rgb_array(frame: Frame) -> np.ndarray:
-    """One frame as an (H, W, 3) uint8 RGB array (PIL images are converted to RGB)."""
+def to_rgb_array(frame: Frame, *, name: str = "frame") -> np.ndarray:
+    """One frame as an (H, W, 3) uint8 RGB array.
+
+    PIL images are converted to RGB (16-bit modes scaled, not clipped). Arrays: uint8 as
+    is; uint16 scaled by 255 / 65535; floats in [0, 1] scaled by 255 (NaN or values
+    outside [0, 1] are an error); (H, W) greyscale replicated; alpha dropped.
+
+    Raises:
+        TypeError: not an array or PIL image, or an unsupported dtype.
+        ValueError: wrong shape, an empty frame, NaN / out-of-range float values.
+    """
     if hasattr(frame, "convert") and hasattr(frame, "size"):  # PIL.Image without importing PIL
-        frame = np.asarray(frame.convert("RGB"))
-    arr = np.asarray(frame)
+        frame = np.asarray(frame if frame.mode.startswith(("I", "F")) else frame.convert("RGB"))
+    if not isinstance(frame, np.ndarray):
+        raise TypeError(f"{name} must be an (H, W, 3) uint8 RGB numpy array or a PIL image, "
+                        f"got {type(frame).__name__}")
+    arr = frame
     if arr.ndim == 2:
         arr = np.repeat(arr[:, :, None], 3, axis=2)
     if arr.ndim != 3 or arr.shape[2] not in (3, 4):
-        raise ValueError(f"a frame must be (H, W, 3) RGB, got an array of shape {arr.shape}")
+        raise ValueError(f"{name} must be (H, W, 3) RGB, got an array of shape {arr.shape}")
+    if arr.shape[0] == 0 or arr.shape[1] == 0:
+        raise ValueError(f"{name} is empty ({arr.shape[1]}x{arr.shape[0]} pixels)")
     if arr.shape[2] == 4:
         arr = arr[:, :, :3]
-    if arr.dtype != np.uint8:
-        if np.issubdtype(arr.dtype, np.floating) and arr.size and float(arr.max()) <= 1.0:
-            arr = arr * 255.0
-        arr = np.clip(arr, 0, 255).astype(np.uint8)
+    if arr.dtype == np.uint8:
+        pass
+    elif arr.dtype == np.uint16 or (np.issubdtype(arr.dtype, np.integer) and arr.dtype.itemsize > 1
+                                    and arr.min() >= 0 and arr.max() <= 65535):
+        arr = ((arr.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
+    elif np.issubdtype(arr.dtype, np.floating):
+        if not np.isfinite(arr).all():
+            raise ValueError(f"{name} holds NaN or infinite values")
+        if arr.min() < 0 or arr.max() > 1:
+            raise ValueError(f"{name} is a float array with values outside [0, 1] "
+                             f"({arr.min():g}..{arr.max():g}); pass uint8 RGB or floats in [0, 1]")
+        arr = np.round(arr * 255.0).astype(np.uint8)
+    else:
+        raise TypeError(f"{name} has unsupported dtype {arr.dtype}; pass uint8 RGB (uint16 and "
+                        "floats in [0, 1] are scaled)")
     return np.ascontiguousarray(arr)
 
 
 def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
-    """Frames as a list of (H, W, 3) uint8 RGB arrays.
+    """Frames as a list of (H, W, 3) uint8 RGB arrays (each converted by :func:`to_rgb_array`).
 
     Accepts a list of (H, W, 3) arrays or PIL images, or one (T, H, W, 3) array.
     A single (H, W, 3) frame is treated as a one-frame video.
@@ -95,7 +120,10 @@ def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
             raise ValueError(f"frames must be (T, H, W, 3) or a list of (H, W, 3); got shape {frames.shape}")
     elif hasattr(frames, "convert"):  # one PIL image
         frames = [frames]
-    out = [to_rgb_array(f) for f in frames]
+    elif frames is None or isinstance(frames, (str, bytes)) or not hasattr(frames, "__iter__"):
+        raise TypeError("frames must be a list of (H, W, 3) uint8 RGB arrays or PIL images, or a "
+                        f"(T, H, W, 3) array; got {type(frames).__name__}")
+    out = [to_rgb_array(f, name=f"frame {i}") for i, f in enumerate(frames)]
     if not out:
         raise ValueError("frames is empty: pass at least one (H, W, 3) uint8 RGB frame")
     return out
