@@ -30,8 +30,15 @@ EXPECTED_ERRORS = (InputError, ValueError, TypeError, OSError, ImportError, Memo
 _DEBUG_HELP = "show the full traceback of an error instead of a one-line message"
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser with its usage errors on one line (subcommand parsers too)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="motionbits",
         description="Segment every moving rigid body in a video by its motion alone (MotionBits).",
     )

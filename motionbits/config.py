@@ -27,7 +27,7 @@ _FIELD_TYPES = {
 
 #: Allowed values of the numeric fields, as intervals ("inf" = no upper bound).
 _RANGES = {
-    "n_nodes": "[16, 4000000]",
+    "n_nodes": "[16, 1000000]",
     "k_neighbors": "[1, 24]",
     "max_side": "[32, 16384]",
     "seed_fraction": "(0, 1]",

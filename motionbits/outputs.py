@@ -16,7 +16,7 @@ from types import TracebackType
 
 from motionbits.errors import InputError
 
-__all__ = ["StagedFolder"]
+__all__ = ["StagedFolder", "check_output_file", "write_text_atomic"]
 
 
 class StagedFolder:
@@ -107,3 +107,31 @@ def _missing_parents(dest: Path) -> list[Path]:
 def _names(entries: list[str], limit: int = 3) -> str:
     more = f", ... {len(entries) - limit} more" if len(entries) > limit else ""
     return ", ".join(entries[:limit]) + more
+
+
+def check_output_file(path: str | os.PathLike, option: str) -> Path:
+    """Fail early (before any work) if the file ``path`` could not be written later."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{option} {path} is a folder, not a file")
+    parent = path.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise InputError(f"cannot write {option} {path}: {parent} is not a writable folder")
+    return path
+
+
+def write_text_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to a temporary file next to ``path``, then rename it to ``path``:
+    readers never see a half-written file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.partial-", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

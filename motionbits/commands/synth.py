@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import argparse
 
+from motionbits.errors import InputError
+from motionbits.outputs import StagedFolder
+
 __all__ = ["register", "run"]
 
 
@@ -26,6 +29,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--size", default="640x480", metavar="WxH", help="frame size (640x480)")
     p.add_argument("--frames", type=int, default=None, metavar="T",
                    help="frames per clip (default: random 12-16 per scene)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing --out folder of an earlier run (default: refuse)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
     return p
@@ -35,21 +40,28 @@ def _size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise ValueError(f"--size must look like 640x480, got {text!r}") from None
+        raise InputError(f"--size must be WIDTHxHEIGHT like 640x480, got {text!r}") from None
     if w < 32 or h < 32:
-        raise ValueError(f"--size {text} is too small (at least 32x32)")
+        raise InputError(f"--size {text} is too small (at least 32x32)")
     return w, h
 
 
 def run(args: argparse.Namespace) -> int:
-    from motionbits.synth.mujoco_moribo import generate_track
-
     w, h = _size(args.size)
     if args.scenes < 1:
-        raise ValueError("--scenes must be at least 1")
+        raise InputError("--scenes must be at least 1")
     if args.frames is not None and args.frames < 2:
-        raise ValueError("--frames must be at least 2")
-    for track in dict.fromkeys(args.track):
-        generate_track(track, args.scenes, args.seed, args.out, width=w, height=h,
-                       n_frames=args.frames, progress=not args.quiet)
+        raise InputError("--frames must be at least 2")
+    from motionbits.synth.mujoco_backend import import_mujoco
+    from motionbits.synth.mujoco_moribo import generate_track
+
+    import_mujoco()  # the [sim] extra: fails here, before any output
+    tracks = list(dict.fromkeys(args.track))
+    # all tracks go to a temporary folder renamed to --out at the end: never half-written
+    with StagedFolder(args.out, overwrite=args.overwrite, replaceable={"robot", "hand"}) as staged:
+        for track in tracks:
+            generate_track(track, args.scenes, args.seed, staged.path, width=w, height=h,
+                           n_frames=args.frames, progress=not args.quiet)
+        staged.publish()
+    print(f"wrote {', '.join(f'{args.out}/{t}' for t in tracks)}")
     return 0
