@@ -44,8 +44,9 @@ def sparse_hungarian_match(k: int, m: int, rows: np.ndarray, cols: np.ndarray,
 
     Small problems (K M <= ``DENSE_MATCH_CELLS``) are solved densely, exactly as
     :func:`hungarian_match`. Larger ones are split into the connected components of the
-    bipartite graph of positive pairs (objects that share no pixel never interact); each
-    small component is solved densely and a large one as a minimum-weight full matching
+    bipartite graph of positive pairs (objects that share no pixel never interact); a
+    component with one GT object or one prediction takes its best pair, any other small
+    component is solved densely and a large one as a minimum-weight full matching
     of an augmented sparse graph in which every object may also stay unmatched (LAPJVsp,
     ``scipy.sparse.csgraph.min_weight_full_bipartite_matching``).
 
@@ -69,12 +70,18 @@ def sparse_hungarian_match(k: int, m: int, rows: np.ndarray, cols: np.ndarray,
     graph = coo_array((np.ones(len(rows)), (rows, cols + k)), shape=(k + m, k + m))
     _, comp = connected_components(graph, directed=False)
     edge_comp = comp[rows]
-    order = np.argsort(edge_comp, kind="stable")
+    n_rows = np.bincount(comp[:k], minlength=comp.max() + 1)
+    n_cols = np.bincount(comp[k:], minlength=comp.max() + 1)
+    # one GT object or one prediction in the component: its best pair (the usual case)
+    star = (n_rows[edge_comp] == 1) | (n_cols[edge_comp] == 1)
+    order = np.lexsort((cols, rows, -score, edge_comp))
+    order = order[star[order]]
+    first = order[np.r_[True, np.diff(edge_comp[order]) != 0]] if order.size else order
+    out_r, out_c = [rows[first]], [cols[first]]
+    rest = np.flatnonzero(~star)
+    order = rest[np.argsort(edge_comp[rest], kind="stable")]
     bounds = np.flatnonzero(np.diff(edge_comp[order])) + 1
-    out_r, out_c = [], []
-    for idx in np.split(order, bounds):
-        if idx.size == 0:
-            continue
+    for idx in np.split(order, bounds) if order.size else []:
         r_ids, r = np.unique(rows[idx], return_inverse=True)
         c_ids, c = np.unique(cols[idx], return_inverse=True)
         if r_ids.size * c_ids.size <= DENSE_MATCH_CELLS:
@@ -85,9 +92,7 @@ def sparse_hungarian_match(k: int, m: int, rows: np.ndarray, cols: np.ndarray,
             mr, mc = _augmented_match(r_ids.size, c_ids.size, r, c, score[idx])
         out_r.append(r_ids[mr])
         out_c.append(c_ids[mc])
-    if not out_r:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    r, c = np.concatenate(out_r), np.concatenate(out_c)
+    r, c = np.concatenate(out_r).astype(np.int64), np.concatenate(out_c).astype(np.int64)
     order = np.argsort(r, kind="stable")
     return r[order], c[order]
 
