@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         if args.debug:
             raise
-        print(f"motionbits {args.command}: interrupted", file=sys.stderr)
+        print(f"motionbits {args.command}: error: interrupted", file=sys.stderr)
         return 130
 
 
