@@ -75,7 +75,9 @@ class MotionBitsConfig:
     # --- graph construction (paper Sec. 5.1, Supp. A) ---
     n_nodes: int = 10_000  # Supp. A: sqrt(n) x sqrt(n) = 100 x 100 grid
     k_neighbors: int = 5  # Supp. A: k = 5 nearest grid neighbours
-    max_side: int = 640  # Supp. A: parameters derived for 480x640 / 640x480 video
+    # Supp. A: parameters derived for 480x640 / 640x480 video. Longest side of the working
+    # resolution; smaller inputs are upsampled only up to 640, never beyond
+    max_side: int = 640
 
     # --- soft label propagation (paper Sec. 5.2, Supp. A) ---
     seed_fraction: float = 0.04  # Supp. A: C = 0.04 n seeds (C = 400 at n = 10,000)

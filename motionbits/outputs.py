@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
+from fnmatch import fnmatch
 from pathlib import Path
 from types import TracebackType
 
@@ -28,8 +29,8 @@ class StagedFolder:
         dest: the output folder.
         overwrite: replace a non-empty ``dest``; without it such a ``dest`` is refused.
         option: how the destination is named in error messages (e.g. ``"--out"``).
-        replaceable: if given, ``overwrite`` replaces only a folder whose entries are all
-            in this set (a previous output of the same command), so that a mistyped
+        replaceable: if given, ``overwrite`` replaces only a folder whose entries all
+            match these names or glob patterns (a previous output of the same command), so that a mistyped
             ``--out`` never deletes unrelated files.
 
     Raises (on construction, before anything is written):
@@ -49,7 +50,8 @@ class StagedFolder:
                 raise InputError(
                     f"{option} {self.dest} already holds files ({_names(entries)}); pass "
                     "--overwrite to replace it, or choose another folder")
-            alien = [e for e in entries if replaceable is not None and e not in replaceable]
+            alien = [e for e in entries if replaceable is not None
+                     and not any(fnmatch(e, pattern) for pattern in replaceable)]
             if alien:
                 raise InputError(
                     f"{option} {self.dest} holds files that this command did not write "
@@ -75,14 +77,17 @@ class StagedFolder:
             shutil.rmtree(self.path, ignore_errors=True)
             self._remove_parents()
 
-    def publish(self) -> Path:
-        """Move the finished folder to ``dest`` (replacing an old one whole); returns it."""
+    def publish(self, inner: str | None = None) -> Path:
+        """Move the finished folder (or its subfolder ``inner``) to ``dest``, replacing an
+        old one whole; returns ``dest``."""
         old = None
         if self.dest.exists():
             old = self.dest.parent / f"{self.path.name}.old"
             self.dest.rename(old)
-        self.path.rename(self.dest)
+        (self.path if inner is None else self.path / inner).rename(self.dest)
         self.published = True
+        if inner is not None:
+            shutil.rmtree(self.path, ignore_errors=True)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
         return self.dest

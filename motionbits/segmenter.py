@@ -44,6 +44,9 @@ __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_vide
 
 #: Shortest side, in working pixels, that the default flow (OpenCV DIS) handles.
 MIN_WORK_SIDE = 20
+#: Smaller inputs are upsampled to at most this longest side (the paper's 640x480, where
+#: the pixel parameters hold); ``max_side`` never upsamples beyond max(input, this).
+REFERENCE_SIDE = 640
 
 #: Stage names of the per-frame timing report, in pipeline order.
 STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "bookkeeping")
@@ -157,7 +160,10 @@ class MotionBitsSegmenter:
 
     def _start(self, frame: np.ndarray) -> None:
         h, w = frame.shape[:2]
-        scale = min(1.0, self.config.max_side / max(h, w))  # never upsampled
+        # longest working side: max_side, but above the input's size only up to
+        # REFERENCE_SIDE (pixel parameters are tuned there): the cost is bounded by design
+        side = min(self.config.max_side, max(h, w, REFERENCE_SIDE))
+        scale = side / max(h, w)
         hw, ww = self._work_size = (int(round(h * scale)), int(round(w * scale)))
         if min(hw, ww) < MIN_WORK_SIDE:
             raise ValueError(

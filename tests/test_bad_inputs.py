@@ -67,6 +67,7 @@ class Case:
     absent: tuple[str, ...] = ()  # paths under tmp that must not exist afterwards
     rc: int = 2
     limit: float = 60.0
+    requires: Callable[[], str | None] | None = None  # returns why the case cannot run here
 
 
 # --------------------------------------------------------------------------- inputs
@@ -240,7 +241,7 @@ def run_case(case: Case, tmp: Path) -> tuple[str, str, Outcome | None]:
     if case.check is not None and o.exc is None:
         ok = case.check
         case = Case(case.id, case.run, case.expect, case.words, lambda o_, _: ok(o_, tmp),
-                    case.absent, case.rc, case.limit)
+                    case.absent, case.rc, case.limit, case.requires)
     return (*verdict(case, o), o)
 
 
@@ -290,8 +291,12 @@ def earlier_output(tmp: Path) -> None:
 
 
 def unrelated_files(tmp: Path) -> None:
-    (tmp / "out").mkdir()
+    (tmp / "out").mkdir(parents=True)
     (tmp / "out" / "thesis.tex").write_text("precious")
+
+
+def robot_track_with_thesis(tmp: Path) -> None:
+    unrelated_files(tmp / "d" / "robot")  # d/robot/out/thesis.tex
 
 
 def a_file(name: str) -> Callable[[Path], None]:
@@ -336,6 +341,14 @@ def no_torch_ops():
     return mock.patch.dict(sys.modules, {"torch": None, "motionbits.torch_ops": None})
 
 
+def mujoco_renders() -> str | None:
+    try:
+        from motionbits.synth.mujoco_backend import render_check
+    except ImportError as exc:
+        return str(exc)
+    return render_check()
+
+
 def rerun_as_prediction(tmp: Path) -> None:
     """A 6-frame segment output replaced by a 1-frame one (whose labels are all background)
     at the place where ``eval`` looks for the prediction of scene_0000."""
@@ -361,6 +374,15 @@ def _segment(frames, config=None, flow=None):
 
     seg = MotionBitsSegmenter(config, flow=flow)
     return [seg.update(f) for f in frames]
+
+
+def _work_size(shape, config):
+    """(labels shape, working size) after one frame of ``shape``."""
+    from motionbits import MotionBitsSegmenter
+
+    seg = MotionBitsSegmenter(config)
+    res = seg.update(np.zeros((*shape, 3), np.uint8))
+    return res.labels.shape, seg._work_size
 
 
 def _small_config(**kw):
@@ -546,7 +568,14 @@ CASES: list[Case] = [
     Case("synth/scenes-0", cli("synth", "--track", "robot", "--out", "{t}/s", "--scenes", "0"), CLEAR, "--scenes", absent=("s",)),
     Case("synth/frames-1", cli("synth", "--track", "robot", "--out", "{t}/s", "--frames", "1"), CLEAR, "--frames", absent=("s",)),
     Case("synth/track-unknown", cli("synth", "--track", "car", "--out", "{t}/s"), CLEAR, "--track", absent=("s",)),
-    Case("synth/out-not-empty", prepared(unrelated_files, cli("synth", "--track", "robot", "--out", "{t}/out")), CLEAR, "--overwrite"),
+    Case("synth/track-not-empty", prepared(robot_track_with_thesis, cli(
+        "synth", "--track", "robot", "--out", "{t}/d")), CLEAR, "--overwrite"),
+    Case("synth/overwrite-unrelated", prepared(robot_track_with_thesis, cli(
+        "synth", "--track", "robot", "--out", "{t}/d", "--overwrite")), CLEAR, "did not write"),
+    Case("synth/other-track-kept", prepared(lambda t: (t / "d/hand/scene_0000").mkdir(parents=True), cli(
+        "synth", "--track", "robot", "--out", "{t}/d", "--scenes", "1", "--frames", "3", "--size", "64x48", "--quiet")),
+        CORRECT, check=lambda o, t: (t / "d/hand/scene_0000").is_dir() and (t / "d/robot/scene_0000/gt.png").is_file(),
+        requires=mujoco_renders),
     # ---- benchmark
     Case("benchmark/option-int", cli("benchmark", "--data", "{a}/data", "--methods", "motionbits", "--quiet",
                                      "--option", "motionbits.n_nodes=400", "--option", "motionbits.max_side=160"),
@@ -594,8 +623,12 @@ CASES: list[Case] = [
     Case("api/config-numpy-int", api(lambda t: _config(n_nodes=np.int64(900))), CORRECT,
          check=lambda o, t: o.value.n_nodes == 900),
     # ---- motionbits API: frames and flow
-    Case("api/max_side-never-upsamples", api(lambda t: _segment(_F, _config(n_nodes=400, max_side=4096))),
-         CORRECT, check=lambda o, t: o.value[-1].labels.shape == (120, 160)),
+    Case("api/max_side-huge-small-input", api(lambda t: _work_size((120, 160), _config(max_side=16384))),
+         CORRECT, check=lambda o, t: o.value == ((120, 160), (480, 640))),  # up to 640 only
+    Case("api/max_side-huge-large-input", api(lambda t: _work_size((900, 1200), _config(max_side=16384))),
+         CORRECT, check=lambda o, t: o.value == ((900, 1200), (900, 1200))),  # never beyond the input
+    Case("api/max_side-small", api(lambda t: _work_size((120, 160), _config(max_side=80))),
+         CORRECT, check=lambda o, t: o.value == ((120, 160), (60, 80))),
     Case("api/flow-wrong-shape", api(lambda t: _segment(_F, _small_config(), _flow_returning(
         lambda p: np.zeros((10, 10, 2), np.float32)))), CLEAR, "flow backend"),
     Case("api/flow-nan", api(lambda t: _segment(_F, _small_config(), _flow_returning(
@@ -687,6 +720,9 @@ def _leftovers(tmp: Path) -> list[str]:
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
 def test_case(case: Case, tmp: Path) -> None:
+    reason = case.requires() if case.requires is not None else None
+    if reason:
+        pytest.skip(reason)
     got, why, o = run_case(case, tmp)
     assert got == case.expect, f"{case.id}: {got}: {why}"
     assert not _leftovers(tmp), f"partial output left: {_leftovers(tmp)}"

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+from pathlib import Path
 
 from motionbits.errors import InputError
 from motionbits.outputs import StagedFolder
@@ -30,7 +32,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--frames", type=int, default=None, metavar="T",
                    help="frames per clip (default: random 12-16 per scene)")
     p.add_argument("--overwrite", action="store_true",
-                   help="replace an existing --out folder of an earlier run (default: refuse)")
+                   help="replace the tracks already in --out (default: refuse; other tracks "
+                        "in --out are always kept)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
     return p
@@ -48,6 +51,8 @@ def _size(text: str) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     w, h = _size(args.size)
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise InputError(f"--out {args.out} is a file, not a folder")
     if args.scenes < 1:
         raise InputError("--scenes must be at least 1")
     if args.frames is not None and args.frames < 2:
@@ -57,11 +62,15 @@ def run(args: argparse.Namespace) -> int:
 
     import_mujoco()  # the [sim] extra: fails here, before any output
     tracks = list(dict.fromkeys(args.track))
-    # all tracks go to a temporary folder renamed to --out at the end: never half-written
-    with StagedFolder(args.out, overwrite=args.overwrite, replaceable={"robot", "hand"}) as staged:
-        for track in tracks:
-            generate_track(track, args.scenes, args.seed, staged.path, width=w, height=h,
+    # each track is written to a temporary folder renamed to --out/TRACK when complete:
+    # never half-written; other tracks already in --out are kept
+    with contextlib.ExitStack() as stack:
+        staged = [stack.enter_context(StagedFolder(Path(args.out) / t, overwrite=args.overwrite,
+                                                   replaceable={"scene_*"})) for t in tracks]
+        for track, folder in zip(tracks, staged):
+            generate_track(track, args.scenes, args.seed, folder.path, width=w, height=h,
                            n_frames=args.frames, progress=not args.quiet)
-        staged.publish()
+        for track, folder in zip(tracks, staged):
+            folder.publish(inner=track)
     print(f"wrote {', '.join(f'{args.out}/{t}' for t in tracks)}")
     return 0
