@@ -128,6 +128,9 @@ class MotionBitsConfig:
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
 
     def __post_init__(self) -> None:
+        if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
+            raise ValueError(f"invalid MotionBitsConfig backend {self.backend!r}; choose one of "
+                             + ", ".join(repr(b) for b in BACKENDS) + " (N = GPU index)")
         # Generic over the fields, so a new field is checked without touching this method:
         # its type comes from its annotation, its range (if any) from ``_RANGES``.
         for f in fields(self):
@@ -139,9 +142,6 @@ class MotionBitsConfig:
             if f.name in _RANGES and not _in_range(value, _RANGES[f.name]):
                 raise ValueError(f"MotionBitsConfig.{f.name} must be in {_RANGES[f.name]}, "
                                  f"got {value!r}")
-        if not _BACKEND_RE.fullmatch(self.backend):
-            raise ValueError(f"invalid MotionBitsConfig backend {self.backend!r}; choose one of "
-                             + ", ".join(repr(b) for b in BACKENDS) + " (N = GPU index)")
 
     @property
     def grid_side(self) -> int:
