@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 from contextlib import nullcontext
-from pathlib import Path
 
 from motionbits.errors import InputError
 from motionbits.outputs import StagedFolder, check_output_file, write_text_atomic
