@@ -21,6 +21,7 @@ COMMAND_MODULES = (
     "motionbits.commands.eval",
     "motionbits.commands.synth",
     "motionbits.commands.benchmark",
+    "motionbits.commands.scenes",
 )
 
 #: Failures that are the input's or the environment's, not a bug: reported in one line.

@@ -119,6 +119,8 @@ def test_benchmark_runner_and_command(tmp_path, capsys):
                              save_pred=tmp_path / "pred", progress=False)
     assert set(res) == {"oracle", "flow-cc"}  # the method that cannot run is skipped
     assert res["oracle"]["macro"]["F1"] == 1.0 and res["oracle"]["macro"]["BF1"] == 1.0
+    assert res["oracle"]["false_positives"] == {"static_fp": 0.0, "static_fp_scene": 0.0,
+                                                "spurious": 0.0}
     assert 0.0 < res["flow-cc"]["macro"]["F1"] <= 1.0
     assert spf["flow-cc"] > 0
     assert (tmp_path / "pred" / "flow-cc" / "toy" / "s1.png").is_file()
@@ -128,7 +130,7 @@ def test_benchmark_runner_and_command(tmp_path, capsys):
                 ["benchmark", "--data", str(tmp_path / "data"), "--methods", "flow-cc",
                  "--json", str(out), "--quiet"]) == 0
     text = capsys.readouterr().out
-    assert "flow-cc" in text and "s/frame" in text
+    assert "flow-cc" in text and "s/frame" in text and "sFP" in text
     assert json.loads(out.read_text())["methods"]["flow-cc"]["macro"]["F1"] == pytest.approx(
         res["flow-cc"]["macro"]["F1"])
     # Saved predictions are readable by 'motionbits eval'.

@@ -52,6 +52,13 @@ class Contingency:
         return self.table[1:, 1:]
 
     @property
+    def background_row(self) -> np.ndarray:
+        """(M + 1,) int64 pixels of GT background per predicted index (0 = background)."""
+        bg = self.rows == 0
+        return np.bincount(self.cols[bg], self.counts[bg],
+                           minlength=self.pred_ids.size + 1).astype(np.int64)
+
+    @property
     def gt_sizes(self) -> np.ndarray:
         """(K,) int64 pixels of each GT object."""
         return np.bincount(self.rows, self.counts, minlength=self.gt_ids.size + 1)[1:].astype(np.int64)
