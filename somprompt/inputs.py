@@ -22,7 +22,7 @@ def as_rgb_array(scene: ImageLike, *, name: str = "scene") -> np.ndarray:
 
     Args:
         scene: (H, W, 3) uint8 RGB numpy array, or a PIL image of any mode (converted
-            to RGB).
+            to RGB; 16-bit and 32-bit integer modes scaled from 0..65535, not clipped).
         name: what to call the argument in error messages.
 
     Raises:
@@ -30,6 +30,12 @@ def as_rgb_array(scene: ImageLike, *, name: str = "scene") -> np.ndarray:
         ValueError: wrong number of dimensions or channels, or an empty image.
     """
     if isinstance(scene, Image.Image):
+        if scene.mode.startswith("I"):  # "I;16*" / "I": 16-bit values; convert() would clip
+            grey = np.asarray(scene).astype(np.int64)
+            if grey.size and (grey.min() < 0 or grey.max() > 65535):
+                raise ValueError(f"{name} is a mode {scene.mode} image with values outside 0..65535")
+            grey = ((grey * 255 + 32767) // 65535).astype(np.uint8)
+            return np.repeat(grey[..., None], 3, axis=2)
         return np.asarray(scene.convert("RGB")).copy()
     if not isinstance(scene, np.ndarray):
         raise TypeError(

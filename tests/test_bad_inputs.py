@@ -442,11 +442,12 @@ def _parse(text, labels=None, **kw):
     return parse_answer(text, labels=labels, **kw)
 
 
-def _draw(labels, shape=None, **kw):
+def _draw(labels, shape=None, scene=None, **kw):
     from somprompt import SetOfMarkRenderer
 
     shape = shape or labels.shape
-    return SetOfMarkRenderer(**kw).render(np.zeros((*shape, 3), np.uint8), labels)
+    scene = np.zeros((*shape, 3), np.uint8) if scene is None else scene
+    return SetOfMarkRenderer(**kw).render(scene, labels)
 
 
 _GRAD16 = (np.arange(64 * 64, dtype=np.uint32).reshape(64, 64) * 16).astype(np.uint16)
@@ -676,6 +677,8 @@ CASES: list[Case] = [
     Case("somprompt/max-marks-0", api(lambda t: _draw(_LAB, max_marks=0)), CLEAR, "max_marks"),
     Case("somprompt/draw-shape-mismatch", api(lambda t: _draw(_LAB, shape=(30, 30))), CLEAR, "labels"),
     Case("somprompt/draw-float-labels", api(lambda t: _draw(_LAB.astype(np.float32))), CLEAR, "labels"),
+    Case("somprompt/draw-on-16bit-pil", api(lambda t: _draw(np.zeros((64, 64), np.int64), scene=Image.fromarray(_GRAD16))),
+         CORRECT, check=lambda o, t: np.asarray(o.value.image).max() == round(_GRAD16.max() / 257)),
     Case("somprompt/parse-huge-mark", api(lambda t: _parse("It is [999999999999] and [3].", _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3] and o.value.unknown == ["999999999999"]),
     Case("somprompt/parse-5-digit-list", api(lambda t: _parse("objects 3, 12345 and 5", _LAB)), CORRECT,
