@@ -10,7 +10,9 @@ Each case is run and given a verdict:
 - ``correct result``: exit status 0 / a return value that passes the case's check;
 - ``traceback``: an exception of another kind, or a traceback on stderr;
 - ``silently wrong``: success where an error was due, or a result that fails its check;
-- ``hang``: no answer within the case's time limit.
+- ``hang``: no answer within the case's time limit;
+- ``unclear error``: a failure without traceback whose message is not one line naming the
+  problem (e.g. behind a stale progress bar, or about something the user never passed).
 
 Every case must get the verdict it expects, and leave nothing partial (``*.partial-*``)
 or stale on disk. ``python tests/test_bad_inputs.py`` prints the verdict counts.
@@ -35,9 +37,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-CLEAR, CORRECT, TRACEBACK, WRONG, HANG = (
-    "clear error", "correct result", "traceback", "silently wrong", "hang")
-VERDICTS = (CLEAR, CORRECT, TRACEBACK, WRONG, HANG)
+CLEAR, CORRECT, TRACEBACK, WRONG, HANG, UNCLEAR = (
+    "clear error", "correct result", "traceback", "silently wrong", "hang", "unclear error")
+VERDICTS = (CLEAR, CORRECT, TRACEBACK, WRONG, HANG, UNCLEAR)
 API_ERRORS = (ValueError, TypeError, OSError, ImportError)
 SEG = ["--nodes", "400", "--max-side", "160", "--quiet"]  # small and fast
 SEG_BIG = ["--nodes", "2500", "--max-side", "320", "--quiet"]  # finds the demo clip's bodies
@@ -207,7 +209,7 @@ def verdict(case: Case, o: Outcome) -> tuple[str, str]:
                 return TRACEBACK, f"{type(o.exc).__name__}: {msg[:300]}"
             if case.expect == CLEAR and case.words.lower() in msg.lower():
                 return CLEAR, msg
-            return WRONG, f"{type(o.exc).__name__}: {msg[:300]}"
+            return UNCLEAR, f"{type(o.exc).__name__}: {msg[:300]}"
         if case.expect == CORRECT and (case.check is None or case.check(o, None)):
             return CORRECT, ""
         return WRONG, f"returned {str(o.value)[:200]!r}"
@@ -219,7 +221,7 @@ def verdict(case: Case, o: Outcome) -> tuple[str, str]:
         if (case.expect == CLEAR and one and o.rc == case.rc
                 and case.words.lower() in lines[0].lower()):
             return CLEAR, lines[0]
-        return WRONG, f"rc {o.rc}: {o.err[-300:]!r}"
+        return UNCLEAR, f"rc {o.rc}: {o.err[-300:]!r}"
     if case.expect == CORRECT and (case.check is None or case.check(o, None)):
         return CORRECT, ""
     return WRONG, f"rc 0: {o.out[-200:]!r} {o.err[-200:]!r}"
@@ -766,8 +768,13 @@ def test_sparse_matching_equals_dense() -> None:
         assert np.isclose(dense[rows, cols].sum(), best)
 
 
-def report(cases: list[Case] = CASES) -> dict[str, int]:
-    """Run every case and print its verdict and the counts (``python tests/test_bad_inputs.py``)."""
+def report(cases: list[Case] = CASES, isolate: bool = False) -> dict[str, int]:
+    """Run every case and print its verdict and the counts (``python tests/test_bad_inputs.py``).
+
+    ``isolate``: each case in its own process, killed after its time limit (a hang in
+    native code cannot be interrupted from Python).
+    """
+    import subprocess
     import tempfile
 
     counts = dict.fromkeys(VERDICTS, 0)
@@ -777,14 +784,38 @@ def report(cases: list[Case] = CASES) -> dict[str, int]:
         for i, case in enumerate(cases):
             tmp = root / f"case{i}"
             tmp.mkdir()
-            got, why, _ = run_case(case, tmp)
-            got = got if got != case.expect or not _leftovers(tmp) else WRONG
+            if isolate:
+                try:
+                    p = subprocess.run([sys.executable, __file__, "--one", case.id, str(tmp)],
+                                       capture_output=True, text=True, timeout=case.limit + 30)
+                    got, _, why = p.stdout.strip().splitlines()[-1].partition("\t")
+                    if got not in VERDICTS:
+                        got, why = TRACEBACK, p.stderr[-300:]
+                except subprocess.TimeoutExpired:
+                    got, why = HANG, f"killed after {case.limit + 30:g} s"
+                except IndexError:
+                    got, why = TRACEBACK, p.stderr[-300:]
+            else:
+                got, why = _judge(case, tmp)
             counts[got] += 1
             print(f"{case.id:<44} {got:<15} {'' if got == case.expect else why[:150]}", flush=True)
     print(f"{len(cases)} cases: " + ", ".join(f"{v} {n}" for v, n in counts.items()))
     return counts
 
 
-if __name__ == "__main__":  # python tests/test_bad_inputs.py [--skip CASE_ID ...]
+def _judge(case: Case, tmp: Path) -> tuple[str, str]:
+    got, why, _ = run_case(case, tmp)
+    left = _leftovers(tmp) + [rel for rel in case.absent if (tmp / rel).exists()]
+    if got == case.expect and left:
+        return WRONG, f"partial or stale output left: {left}"
+    return got, why
+
+
+if __name__ == "__main__":  # python tests/test_bad_inputs.py [--isolate] [--skip CASE_ID ...]
+    if "--one" in sys.argv:  # internal: one case in this process, for --isolate
+        case_id, tmp_dir = sys.argv[sys.argv.index("--one") + 1:][:2]
+        got, why = _judge(next(c for c in CASES if c.id == case_id), Path(tmp_dir))
+        print(f"{got}\t{' '.join(why.split())}")
+        sys.exit(0)
     skip = set(sys.argv[sys.argv.index("--skip") + 1:]) if "--skip" in sys.argv else set()
-    report([c for c in CASES if c.id not in skip])
+    report([c for c in CASES if c.id not in skip], isolate="--isolate" in sys.argv)
