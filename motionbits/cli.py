@@ -59,7 +59,7 @@ def one_line(exc: BaseException) -> str:
     lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
     text = "; ".join(lines) or type(exc).__name__
     if isinstance(exc, MemoryError):
-        text = f"out of memory ({text}); use a smaller --max-side or --nodes"
+        text = f"out of memory ({text})"
     elif isinstance(exc, OSError) and exc.filename and str(exc.filename) not in text:
         text = f"{exc.filename}: {text}"
     return text
