@@ -53,7 +53,6 @@ _RANGES = {
     "prior_bonus": "[0, inf)",
     "photo_weight": "[0, inf)",
     "flow_texture": "(0, inf)",
-    "move_cost": "[0, inf)",
     "pixel_evidence": "[0, inf)",
     "match_iou": "[0, 1]",
     "merge_agree": "[0, inf)",
@@ -141,7 +140,6 @@ class MotionBitsConfig:
     # ours: a pixel's flow residual counts fully where its image gradient reaches this many
     # grey levels per px, proportionally less on flatter pixels (their flow is interpolated)
     flow_texture: float = 4.0
-    move_cost: float = 0.15  # px: mask cost of any MotionBit over the background (ties -> static)
     # ours: a pixel's carried MotionBit label is credited (prior_bonus) only where the
     # MotionBit's motion once explained that pixel better than "static" by this many grey
     # levels (3x3 mean) -- a label smeared onto a flat static region does not persist

@@ -96,16 +96,15 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
                   trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
                   prev_gray: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
                   texture: np.ndarray, earned: np.ndarray, *, bonus: float, photo_weight: float,
-                  move_cost: float, evidence: float, kept: np.ndarray, ambiguous: float
+                  evidence: float, kept: np.ndarray, ambiguous: float
                   ) -> tuple[np.ndarray, np.ndarray]:
     """Label every pixel by the motion that best explains it.
 
     The cost of a motion at a pixel is its flow residual (px), weighted by how much texture
     the pixel has, plus ``photo_weight`` times its photometric residual (grey levels, 3x3
-    mean), plus ``move_cost`` for any label but the background: flow is smooth across
-    motion boundaries and interpolated over textureless regions, the images are not, so the
-    photometric term puts the boundary where the texture says it is, and where nothing
-    tells motion from rest the pixel is background. Holes of a label's mask that no other
+    mean): flow is smooth across motion boundaries and interpolated over textureless
+    regions, the images are not, so the photometric term puts the boundary where the
+    texture says it is. Holes of a label's mask that no other
     label fills (a textureless interior) are filled: a rigid body's image has no holes.
 
     Args:
@@ -121,11 +120,11 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
             whose flow is measured, 0 = flat pixel whose flow is interpolated).
         earned: (H, W) bool, carried like ``prior``: where the pixel's MotionBit once
             explained its images better than "static" by ``evidence`` grey levels. Only
-            there does a carried MotionBit label get the credit: a label smeared onto a
-            flat region, where motion is not observable, does not persist on its own.
+            there does a carried MotionBit label get the credit against the background: a
+            label smeared onto a flat region, where motion is not observable, does not
+            persist on its own (against another MotionBit it keeps the credit).
         bonus: cost credited to the prior's label.
         photo_weight: px of cost per grey level of photometric residual.
-        move_cost: px of cost of every label but the background.
         evidence: grey levels (3x3 mean) by which a label's motion must beat "static" at a
             pixel to earn it.
         kept: ids of earlier MotionBits without a cluster now (e.g. bodies that stopped);
@@ -142,17 +141,17 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     static_photo = cv2.blur(np.abs(cur_gray - prev_gray), (window, window))
     static_cost = texture * cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + (
         photo_weight * static_photo)
-    # last frame's label is credited where it was carried consistently and, for a
-    # MotionBit, where its motion once showed in the images (``earned``)
-    held = prior_valid & ((prior == 0) | earned)
-    credit = np.where(held, bonus, 0.0).astype(np.float32)
-    best = static_cost - credit * (prior == 0)
+    # last frame's label is credited where it was carried consistently; against the
+    # background, a MotionBit's label only where its motion once showed in the images
+    # (``earned``): elsewhere the background gets the same credit
+    credit = np.where(prior_valid, bonus, 0.0).astype(np.float32)
+    best = static_cost - credit * ((prior == 0) | ~earned)
     out = np.zeros((h, w), np.int32)
     shown = np.zeros((h, w), bool)
     node_map = grid.to_image(node_labels.astype(np.int32))
     for lab in kept:
-        on = (prior == lab) & held
-        cost = static_cost - credit + move_cost
+        on = (prior == lab) & prior_valid
+        cost = static_cost - credit
         better = on & (cost < best)
         best[better] = cost[better]
         out[better] = lab
@@ -173,8 +172,8 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         my = s * px + c * py + t[1] - py
         resid = np.hypot(mx - flow_back[ys, xs, 0], my - flow_back[ys, xs, 1])
         still = np.hypot(mx, my) < ambiguous
-        own = ((prior[ys, xs] == lab) & held[ys, xs]) | (still & (node_map[ys, xs] == lab))
-        cost = texture[ys, xs] * resid + photo_weight * photo - bonus * own + move_cost
+        own = ((prior[ys, xs] == lab) & prior_valid[ys, xs]) | (still & (node_map[ys, xs] == lab))
+        cost = texture[ys, xs] * resid + photo_weight * photo - bonus * own
         better = cost < best[ys, xs]
         by, bx = ys[better], xs[better]
         best[by, bx] = cost[better]

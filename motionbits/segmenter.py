@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from functools import cache
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterator
 
 import cv2
@@ -33,6 +33,7 @@ from motionbits.merging import (
     MotionBitGroups, fit_affine, rigid_matrix, stillness_visible, touching_pairs, union_excess)
 from motionbits.mcl import markov_cluster_coarse, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
+from motionbits.objects import Instance, encode_rle
 from motionbits.propagation import grid_seeds
 from motionbits.twists import fit_local_motions, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
@@ -50,29 +51,11 @@ STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "mas
           "bookkeeping")
 
 
-@dataclass(frozen=True)
-class MotionBit:
-    """One MotionBit in one frame (coordinates in input pixels).
-
-    Attributes:
-        id: stable id (> 0), kept across frames.
-        area: pixels in the mask.
-        bbox: (x0, y0, x1, y1), inclusive-exclusive.
-        centroid: (x, y).
-        twist: (omega rad/frame, v_x, v_y px/frame) spatial twist of the motion from the
-            previous frame, about the image origin; zeros when it has no cluster this frame.
-        moving: whether it moved between the previous frame and this one.
-        first_moved, last_moved: frame indices of its first and latest motion.
-    """
-
-    id: int
-    area: int
-    bbox: tuple[int, int, int, int]
-    centroid: tuple[float, float]
-    twist: tuple[float, float, float]
-    moving: bool
-    first_moved: int
-    last_moved: int
+#: One MotionBit in one frame: the shared :class:`motionbits.Instance` with ``twist``,
+#: ``moving``, ``first_moved`` and ``last_moved`` set (coordinates in input pixels; the
+#: twist is zeros when it has no cluster this frame). ``update`` leaves ``mask`` unset
+#: (the label map holds it): :meth:`MotionBitsResult.instances` attaches masks.
+MotionBit = Instance
 
 
 @dataclass
@@ -96,6 +79,13 @@ class MotionBitsResult:
     @property
     def ids(self) -> list[int]:
         return [mb.id for mb in self.motionbits]
+
+    def instances(self, rle: bool = False) -> list[Instance]:
+        """``motionbits`` with their (H, W) bool masks from ``labels`` (or COCO RLE when
+        ``rle``; extra ``coco``); ``motionbits.to_supervision`` takes the result."""
+        return [replace(mb, mask=None if rle else self.labels == mb.id,
+                        rle=encode_rle(self.labels == mb.id) if rle else None)
+                for mb in self.motionbits]
 
 
 _STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # the identity motion
@@ -196,6 +186,21 @@ class MotionBitsSegmenter:
         g = self._grid
         return MotionBitsResult(self.frame_index, np.zeros((h, w), np.int32), [],
                                 np.zeros((g.rows, g.cols), np.int32), dict(self._timings))
+
+    @property
+    def backend(self) -> str:
+        """Where the heavy steps run: ``"numpy"`` or ``"torch:<device>"`` (resolved)."""
+        return self._ops.name
+
+    def __call__(self, frames: FrameSource) -> list[np.ndarray]:
+        """Segment one whole video from its first frame: one (H, W) int32 label map per
+        frame (the ``frames -> label maps`` interface of ``somprompt.GroundedVQA``).
+
+        Resets the stream first, so each call is a new video. ``frames``: anything
+        :func:`motionbits.video.iter_frames` reads (file, folder, array, frames).
+        """
+        self.reset()
+        return [self.update(frame).labels for frame in iter_frames(frames)]
 
     # ------------------------------------------------------------------ main step
     def update(self, frame: np.ndarray) -> MotionBitsResult:
@@ -335,7 +340,7 @@ class MotionBitsSegmenter:
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
-                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight, move_cost=cfg.move_cost,
+                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(2 * cw * ch)))
@@ -344,8 +349,12 @@ class MotionBitsSegmenter:
             moving = self._record_motion(node_ids, ids, thetas, trans, pts)
             own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
             reach = int(np.ceil(max(grid.cell)))
+            # born out of pixels that were in view and had never been in a MotionBit
+            margin = 2 * max(grid.cell)
+            in_view = np.all((seen_pts >= margin) & (seen_pts < np.array(
+                [grid.width, grid.height]) - margin), axis=1)
             born = {int(i) for i in ids[ids >= first_new]
-                    if np.mean(hist_nodes[node_ids == i] == 0) > 0.5}
+                    if np.mean((hist_nodes == 0) & in_view, where=node_ids == i) > 0.5}
             for a, b in touching_pairs(labels, reach=reach):
                 if self._groups.known(a, b):
                     continue

@@ -421,9 +421,9 @@ def _config(**kw):
 
 
 def _adapter_frame(frame):
-    from vlm_adapters.base import to_rgb_array
+    from vlm_adapters.base import to_rgb_frames
 
-    return to_rgb_array(frame)
+    return to_rgb_frames([frame])[0]
 
 
 def _stub_generate(frames):
@@ -644,7 +644,8 @@ CASES: list[Case] = [
         lambda p: np.zeros((*p.shape[:2], 2), np.float64)))), CORRECT, check=lambda o, t: len(o.value) == 3),
     Case("api/frame-8x4000", api(lambda t: _segment([np.zeros((8, 4000, 3), np.uint8)] * 2)), CLEAR, "20 px"),
     Case("api/frame-nan-float", api(lambda t: _segment([np.full((64, 64, 3), np.nan)])), CLEAR, "uint8"),
-    Case("api/frame-uint16", api(lambda t: _segment([np.zeros((64, 64, 3), np.uint16)])), CLEAR, "uint8"),
+    Case("api/frame-uint16-scaled", api(lambda t: __import__("motionbits.video").video.as_rgb_frame(
+        np.dstack([_GRAD16] * 3))), CORRECT, check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
     Case("api/frame-wrong-shape", api(lambda t: _segment([np.zeros((64, 64, 2), np.uint8)])), CLEAR, "shape"),
     Case("api/frame-none", api(lambda t: _segment([None])), CLEAR, "numpy array"),
     Case("api/size-change", api(lambda t: _segment([_F[0], _F[1][:100]], _small_config())), CLEAR, "call reset()"),
@@ -698,14 +699,14 @@ CASES: list[Case] = [
     Case("vlm/max-phrases-0", api(lambda t: _phrases("a red cup", max_phrases=0)), CLEAR, "max_phrases"),
     Case("vlm/frame-uint16-scaled", api(lambda t: _adapter_frame(np.dstack([_GRAD16] * 3))), CORRECT,
          check=lambda o, t: abs(float(o.value.mean()) - float(_GRAD16.mean()) / 257) < 1),
-    Case("vlm/frame-float-nan", api(lambda t: _adapter_frame(np.full((8, 8, 3), np.nan))), CLEAR, "NaN"),
-    Case("vlm/frame-float-out-of-range", api(lambda t: _adapter_frame(np.full((8, 8, 3), 7.0))), CLEAR, "outside [0, 1]"),
-    Case("vlm/frame-float-unit", api(lambda t: _adapter_frame(np.full((8, 8, 3), 0.5))), CORRECT,
-         check=lambda o, t: o.value.dtype == np.uint8 and (o.value == 128).all()),
+    Case("vlm/frame-float-nan", api(lambda t: _adapter_frame(np.full((8, 8, 3), np.nan))), CLEAR, "uint8"),
+    Case("vlm/frame-float-out-of-range", api(lambda t: _adapter_frame(np.full((8, 8, 3), 7.0))), CLEAR, "uint8"),
+    Case("vlm/frame-float-refused", api(lambda t: _adapter_frame(np.full((8, 8, 3), 0.5))), CLEAR, "np.clip"),
     Case("vlm/frame-0x0", api(lambda t: _adapter_frame(np.zeros((0, 0, 3), np.uint8))), CLEAR, "empty"),
     Case("vlm/frame-pil-16bit", api(lambda t: _adapter_frame(Image.fromarray(_GRAD16))), CORRECT,
          check=lambda o, t: o.value.shape == (64, 64, 3) and o.value.max() == round(_GRAD16.max() / 257)),
-    Case("vlm/frame-complex", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.complex64))), CLEAR, "dtype"),
+    Case("vlm/frame-complex", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.complex64))), CLEAR, "uint8"),
+    Case("vlm/frame-int32", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.int32))), CLEAR, "uint8"),
     Case("vlm/frames-empty", api(lambda t: _stub_generate([])), CLEAR, "empty"),
 ]
 # --------------------------------------------------------------------------- tests

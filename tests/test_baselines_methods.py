@@ -3,7 +3,6 @@
 import argparse
 import importlib
 import json
-from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -74,14 +73,16 @@ def test_registry_plugins_and_errors():
         register_method("flow-cc", lambda **kw: None)
 
 
-def test_motionbits_method_takes_last_labels(monkeypatch):
-    def fake_segment_video(frames, config):
-        for i in range(1, len(frames)):
-            yield SimpleNamespace(labels=np.full(frames[i].shape[:2], i, np.int32))
+def test_motionbits_method_takes_last_labels():
+    from motionbits.synth import demo_clip
 
-    monkeypatch.setattr(motionbits, "segment_video", fake_segment_video, raising=False)
-    out = make_method("motionbits")([np.zeros((8, 8, 3), np.uint8)] * 4)
-    assert out.dtype == np.int32 and (out == 3).all()
+    clip = demo_clip(n_frames=4, size=(120, 160))
+    config = motionbits.MotionBitsConfig(n_nodes=900, max_side=240)
+    out = make_method("motionbits", config=config)(clip.frames)
+    expected = motionbits.MotionBitsSegmenter(config)(clip.frames)[-1]
+    assert out.dtype == np.int32 and out.any() and np.array_equal(out, expected)
+    exact = make_method("motionbits", config={"n_nodes": 900, "max_side": 240}, exact=True)
+    assert exact.config == config.with_(exact=True)
 
 
 def _run(module, argv):

@@ -103,7 +103,8 @@ def test_eval_command_prints_table_and_json(dataset, tmp_path, capsys):
     data = json.loads(out.read_text())
     assert set(data) >= {"macro", "pooled", "per_scene"}
     assert set(data["macro"]) >= {"P", "R", "F1", "mIoU", "BP", "BR", "BF1"}
-    assert all(0.0 <= v <= 1.0 for v in data["macro"].values())
+    assert data["macro"] == pytest.approx(evaluate_dataset(gt_root, pred_root, progress=False)["macro"])
+    assert data["macro"]["F1"] == pytest.approx(0.75)
     # hand/b: the false positive lies in the ignored corner; robot/a: none. No spurious.
     assert "sFP" in text and "Spur" in text
     fp = data["false_positives"]

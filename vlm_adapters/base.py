@@ -6,12 +6,14 @@ helpers (`resolve_device`, `resolve_dtype`) import it when called.
 from __future__ import annotations
 
 import abc
-import importlib
 import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Protocol, Union, runtime_checkable
 
 import numpy as np
+
+from motionbits.frames import as_rgb_array, sample_frame_indices
+from motionbits.objects import MissingDependencyError, require
 
 if TYPE_CHECKING:  # pragma: no cover
     from PIL import Image
@@ -26,7 +28,6 @@ __all__ = [
     "BaseVLM",
     "MissingDependencyError",
     "require",
-    "to_rgb_array",
     "to_rgb_frames",
     "to_pil_frames",
     "sample_frames",
@@ -39,79 +40,15 @@ __all__ = [
 DEFAULT_MAX_NEW_TOKENS = 256
 
 
-class MissingDependencyError(ImportError):
-    """An optional dependency of an adapter is not installed; the message names the extra."""
-
-
-def require(module: str, extra: str, purpose: str = "") -> Any:
-    """Import `module` or raise `MissingDependencyError` that says which extra to install.
-
-    Args:
-        module: dotted module name, e.g. ``"transformers"``.
-        extra: the ``motionbits`` extra that provides it, e.g. ``"vlm"`` or ``"yoloe"``.
-        purpose: what needs it, for the message (e.g. ``"Qwen2_5_VLAdapter"``).
-    """
-    try:
-        return importlib.import_module(module)
-    except ImportError as exc:
-        who = f"{purpose} needs" if purpose else "This needs"
-        raise MissingDependencyError(
-            f"{who} the optional dependency '{module.split('.')[0]}', which is not installed "
-            f"or failed to import ({exc}). Install it with: pip install \"motionbits[{extra}]\""
-        ) from exc
-
-
 # --------------------------------------------------------------------------- frames
-
-
-def to_rgb_array(frame: Frame, *, name: str = "frame") -> np.ndarray:
-    """One frame as an (H, W, 3) uint8 RGB array.
-
-    PIL images are converted to RGB (16-bit modes scaled, not clipped). Arrays: uint8 as
-    is; uint16 scaled by 255 / 65535; floats in [0, 1] scaled by 255 (NaN or values
-    outside [0, 1] are an error); (H, W) greyscale replicated; alpha dropped.
-
-    Raises:
-        TypeError: not an array or PIL image, or an unsupported dtype.
-        ValueError: wrong shape, an empty frame, NaN / out-of-range float values.
-    """
-    if hasattr(frame, "convert") and hasattr(frame, "size"):  # PIL.Image without importing PIL
-        frame = np.asarray(frame if frame.mode.startswith(("I", "F")) else frame.convert("RGB"))
-    if not isinstance(frame, np.ndarray):
-        raise TypeError(f"{name} must be an (H, W, 3) uint8 RGB numpy array or a PIL image, "
-                        f"got {type(frame).__name__}")
-    arr = frame
-    if arr.ndim == 2:
-        arr = np.repeat(arr[:, :, None], 3, axis=2)
-    if arr.ndim != 3 or arr.shape[2] not in (3, 4):
-        raise ValueError(f"{name} must be (H, W, 3) RGB, got an array of shape {arr.shape}")
-    if arr.shape[0] == 0 or arr.shape[1] == 0:
-        raise ValueError(f"{name} is empty ({arr.shape[1]}x{arr.shape[0]} pixels)")
-    if arr.shape[2] == 4:
-        arr = arr[:, :, :3]
-    if arr.dtype == np.uint8:
-        pass
-    elif arr.dtype == np.uint16 or (np.issubdtype(arr.dtype, np.integer) and arr.dtype.itemsize > 1
-                                    and arr.min() >= 0 and arr.max() <= 65535):
-        arr = ((arr.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
-    elif np.issubdtype(arr.dtype, np.floating):
-        if not np.isfinite(arr).all():
-            raise ValueError(f"{name} holds NaN or infinite values")
-        if arr.min() < 0 or arr.max() > 1:
-            raise ValueError(f"{name} is a float array with values outside [0, 1] "
-                             f"({arr.min():g}..{arr.max():g}); pass uint8 RGB or floats in [0, 1]")
-        arr = np.round(arr * 255.0).astype(np.uint8)
-    else:
-        raise TypeError(f"{name} has unsupported dtype {arr.dtype}; pass uint8 RGB (uint16 and "
-                        "floats in [0, 1] are scaled)")
-    return np.ascontiguousarray(arr)
 
 
 def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
     """Frames as a list of (H, W, 3) uint8 RGB arrays (each converted by :func:`to_rgb_array`).
 
-    Accepts a list of (H, W, 3) arrays or PIL images, or one (T, H, W, 3) array.
-    A single (H, W, 3) frame is treated as a one-frame video.
+    Accepts a list of frames (see :func:`motionbits.as_rgb_array`: uint8 RGB, greyscale or
+    RGBA arrays, PIL images), or one (T, H, W, 3) array. A single (H, W, 3) frame is
+    treated as a one-frame video.
     """
     if isinstance(frames, np.ndarray):
         if frames.ndim == 3:
@@ -123,7 +60,7 @@ def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
     elif frames is None or isinstance(frames, (str, bytes)) or not hasattr(frames, "__iter__"):
         raise TypeError("frames must be a list of (H, W, 3) uint8 RGB arrays or PIL images, or a "
                         f"(T, H, W, 3) array; got {type(frames).__name__}")
-    out = [to_rgb_array(f, name=f"frame {i}") for i, f in enumerate(frames)]
+    out = [as_rgb_array(f, name=f"frame {i}") for i, f in enumerate(frames)]
     if not out:
         raise ValueError("frames is empty: pass at least one (H, W, 3) uint8 RGB frame")
     return out
@@ -137,18 +74,13 @@ def to_pil_frames(frames: Sequence[Frame] | np.ndarray) -> list[Image.Image]:
 
 
 def sample_frames(frames: Sequence[Frame], num_frames: int | None) -> list[Frame]:
-    """Up to `num_frames` frames spaced evenly over the clip; the last frame is always kept.
+    """Up to `num_frames` frames spaced evenly over the clip; the last frame is always kept
+    (see :func:`motionbits.sample_frame_indices`).
 
     `None` or a number >= len(frames) keeps every frame. The final frame is the one the
     benchmark scores, so it is always included.
     """
-    n = len(frames)
-    if num_frames is None or num_frames >= n:
-        return list(frames)
-    if num_frames < 1:
-        raise ValueError(f"num_frames must be >= 1, got {num_frames}")
-    idx = np.unique(np.round(np.linspace(0, n - 1, num_frames)).astype(int))
-    return [frames[i] for i in idx]
+    return [frames[i] for i in sample_frame_indices(len(frames), num_frames)]
 
 
 # --------------------------------------------------------------------------- paths and devices

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import itertools
 import json
 import math
@@ -14,12 +15,14 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
+from motionbits import __version__
 from motionbits.config import MotionBitsConfig
+from motionbits.config_file import config_from_dict, load_config
 from motionbits.errors import InputError
 from motionbits.outputs import StagedFolder
-from motionbits.overlay import overlay_labels
 from motionbits.segmenter import STAGES, MotionBitsSegmenter
 from motionbits.video import count_frames, iter_frames
+from motionbits.video_writer import H264Writer
 
 #: What ``segment`` writes into ``--out`` (``--overwrite`` replaces only such a folder).
 OUTPUTS = {"labels", "overlay.mp4", "summary.json"}
@@ -29,14 +32,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "segment", help="segment the moving rigid bodies of a video",
         description="Write DIR/labels/NNNNN.png (16-bit label maps, 0 = background), "
-                    "DIR/overlay.mp4 and DIR/summary.json. Without INPUT, a built-in "
-                    "synthetic clip is generated and segmented (and scored against its "
-                    "exact ground truth).")
+                    "DIR/overlay.mp4 (H.264, with somprompt's numbered marks) and DIR/summary.json "
+                    "(the whole config, the backend and the version; `--config DIR/summary.json` "
+                    "repeats the run). Without INPUT, a built-in synthetic clip is generated and "
+                    "segmented (and scored against its exact ground truth).")
     p.add_argument("input", nargs="?", help="video file or folder of images (default: built-in demo clip)")
     p.add_argument("--out", default="motionbits_out", help="output folder (default: %(default)s)")
-    p.add_argument("--nodes", type=int, default=MotionBitsConfig.n_nodes, help="grid nodes n (default: %(default)s)")
-    p.add_argument("--max-side", type=int, default=MotionBitsConfig.max_side,
-                   help="working resolution, longest side in px (default: %(default)s)")
+    p.add_argument("--config", metavar="FILE",
+                   help="TOML or JSON file setting any MotionBitsConfig field (e.g. n_nodes = 2500), "
+                        "or the summary.json of an earlier run to repeat it; --nodes, --max-side and "
+                        "--backend override it")
+    p.add_argument("--nodes", type=int, help=f"grid nodes n (default: {MotionBitsConfig.n_nodes})")
+    p.add_argument("--max-side", type=int,
+                   help=f"working resolution, longest side in px (default: {MotionBitsConfig.max_side})")
     p.add_argument("--every", type=int, default=1, help="use every K-th frame (default: %(default)s)")
     p.add_argument("--start", type=int, default=0,
                    help="index of the first frame to use (default: %(default)s)")
@@ -44,8 +52,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="stop after N used frames (default: all; the paper's windows are 11-16)")
     p.add_argument("--fps", type=float, default=10.0, help="frame rate of overlay.mp4 (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--backend", default=MotionBitsConfig.backend,
-                   help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] (default: %(default)s)")
+    p.add_argument("--backend",
+                   help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] "
+                        f"(default: {MotionBitsConfig.backend})")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an existing --out folder of an earlier run (default: refuse)")
     p.add_argument("--strict", action="store_true",
@@ -78,8 +87,12 @@ def _check_options(args: argparse.Namespace) -> MotionBitsConfig:
         raise InputError(f"--frames must be >= 1, got {args.frames}")
     if not (math.isfinite(args.fps) and args.fps > 0):
         raise InputError(f"--fps must be a positive number, got {args.fps:g}")
+    flags = {k: v for k, v in (("n_nodes", args.nodes), ("max_side", args.max_side),
+                                ("backend", args.backend)) if v is not None}
     try:
-        return MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
+        if args.config:
+            return load_config(args.config, **flags)
+        return config_from_dict(flags, source="options")
     except (TypeError, ValueError) as exc:  # name the option, not the config field
         msg = str(exc).replace("MotionBitsConfig.n_nodes", "--nodes").replace(
             "MotionBitsConfig.max_side", "--max-side")
@@ -132,9 +145,14 @@ def run(args: argparse.Namespace) -> int:
 
 def _segment(args, seg, frames, total, last, out: Path, gt) -> dict:
     """Segment the chosen frames into ``out``; returns the summary (also written there)."""
+    from somprompt import MarkRegistry, SetOfMarkRenderer  # the command draws marks; the library does not
+
     config = seg.config
     (out / "labels").mkdir()
-    writer = None
+    # somprompt's numbered marks and palette: one id, one number and one colour in the
+    # overlay, the marks pictures and the demos
+    renderer, registry = SetOfMarkRenderer(), MarkRegistry()
+    writer = H264Writer(out / "overlay.mp4", args.fps)
     records: dict[int, dict] = {}
     stage_ms: dict[str, list[float]] = {s: [] for s in STAGES}
     frame_ms: list[float] = []
@@ -160,14 +178,8 @@ def _segment(args, seg, frames, total, last, out: Path, gt) -> dict:
             label_file = out / "labels" / f"{i:05d}.png"
             if not cv2.imwrite(str(label_file), result.labels.astype(np.uint16)):
                 raise OSError(f"could not write {label_file}")
-            vis = cv2.cvtColor(overlay_labels(frame, result.labels), cv2.COLOR_RGB2BGR)
-            if writer is None:
-                h, w = vis.shape[:2]
-                writer = cv2.VideoWriter(str(out / "overlay.mp4"), cv2.VideoWriter_fourcc(*"mp4v"),
-                                         args.fps, (w, h))
-                if not writer.isOpened():
-                    raise OSError(f"could not open {out / 'overlay.mp4'} for writing")
-            writer.write(vis)
+            registry.update(result.labels, frame_index=i)
+            writer.write(renderer.render(frame, result.labels, registry).image)
             bar.update(1)
             for mb in result.motionbits:
                 rec = records.setdefault(mb.id, {"id": mb.id})
@@ -190,8 +202,7 @@ def _segment(args, seg, frames, total, last, out: Path, gt) -> dict:
         raise
     finally:
         bar.close()
-        if writer is not None:
-            writer.release()
+        writer.close()
     final_ids = set(result.ids)
     summary = {
         "input": args.input or "built-in demo clip",
@@ -199,8 +210,11 @@ def _segment(args, seg, frames, total, last, out: Path, gt) -> dict:
         "input_frames": {"expected": total, "decoded": decoded},
         "frame_indices": frames_done,
         "size": list(result.labels.shape),
-        "config": {"n_nodes": config.n_nodes, "max_side": config.max_side, "every": args.every,
-                   "start": args.start, "frames": args.frames},
+        "version": __version__,
+        "backend": seg.backend,
+        "config": dataclasses.asdict(config),  # `motionbits segment --config summary.json` repeats the run
+        "window": {"every": args.every, "start": args.start, "frames": args.frames},
+        "marks": {str(i): registry.number(i) for i in registry.ids},  # MotionBit id -> overlay number
         "motionbits": [dict(r, in_last_frame=r["id"] in final_ids) for r in
                        sorted(records.values(), key=lambda r: r["id"])],
         "timings_ms": {
@@ -208,8 +222,8 @@ def _segment(args, seg, frames, total, last, out: Path, gt) -> dict:
             "stages_median": {s: float(np.median(v)) if v else 0.0 for s, v in stage_ms.items()},
             "total_s": float(sum(frame_ms) / 1000),
         },
+        "motionbits_in_last_frame": len(final_ids),
     }
-    summary["motionbits_in_last_frame"] = len(final_ids)
     if gt is not None:
         summary["demo_ground_truth"] = _ground_truth_scores(result.labels, gt)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))

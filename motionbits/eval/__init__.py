@@ -5,7 +5,9 @@ Public names:
     evaluate_frame(pred, gt, ignore=None) -> FrameScores   one final-frame label map pair
     summarize(frames) -> {"macro", "pooled", "false_positives"}   aggregate over a dataset
     read_label_map / write_label_map                        16-bit PNG label maps
-    evaluate_dataset(pred_dir, gt_dir)                      MoRiBo folders (see dataset.py)
+
+MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
+:mod:`motionbits.eval.dataset`.
     adjusted_rand_index(a, b)                               agreement of two partitions
     scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
 """

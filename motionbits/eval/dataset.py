@@ -1,6 +1,6 @@
 """MoRiBo-format folders: scenes, tracks, ground truth, predictions, and dataset scoring.
 
-Layout (DESIGN.md section 3)::
+Layout (see docs/evaluation.md)::
 
     <scene>/frames/00000.jpg ...   ordered frames (any image suffix)
     <scene>/gt.png                 16-bit (or 8-bit / indexed) label map of the final frame

@@ -1,6 +1,6 @@
 """MoRiBo-protocol scores of one frame and their aggregation over a dataset.
 
-Protocol (paper section 6.1; DESIGN.md section 3), on the final frame of each video:
+Protocol (paper section 6.1; docs/evaluation.md), on the final frame of each video:
 
 1. Every (GT object g, predicted object p) pair gets the overlap F of
    P = tp/|P|, R = tp/|G| (``overlap.py``).
