@@ -10,7 +10,6 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from motionbits.errors import InputError
 from motionbits.frames import as_rgb_array, sample_frame_indices
 from motionbits.objects import (
     Instance,
@@ -28,6 +27,7 @@ from motionbits.objects import (
 __version__ = "0.1.0"
 
 _LAZY: dict[str, str] = {
+    "InputError": "motionbits.errors",
     "MotionBitsConfig": "motionbits.config",
     "MotionBit": "motionbits.segmenter",
     "MotionBitsResult": "motionbits.segmenter",

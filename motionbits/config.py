@@ -164,8 +164,8 @@ class MotionBitsConfig:
                 raise TypeError(f"MotionBitsConfig.{f.name} must be {kind[0]}, got "
                                 f"{type(value).__name__} {value!r}")
             if f.name in _RANGES and not _in_range(value, _RANGES[f.name]):
-                raise ValueError(f"MotionBitsConfig.{f.name} must be in {_RANGES[f.name]}, "
-                                 f"got {value!r}")
+                raise ValueError(f"invalid MotionBitsConfig value {f.name}={value!r}: must be in "
+                                 f"{_RANGES[f.name]}")
         if self.merge_disagree < self.merge_agree:
             raise ValueError(f"MotionBitsConfig.merge_disagree ({self.merge_disagree!r}) must be "
                              f">= merge_agree ({self.merge_agree!r})")

@@ -177,7 +177,9 @@ def run(args: argparse.Namespace) -> int:
         config = MotionBitsConfig(n_nodes=args.nodes, max_side=max(size), backend=args.backend)
         MotionBitsSegmenter(config)  # a missing extra (torch) or GPU fails here, before timing
     except (TypeError, ValueError, RuntimeError) as exc:
-        raise InputError(str(exc).replace("MotionBitsConfig.n_nodes", "--nodes")) from None
+        from motionbits.commands.segment import config_option_error
+
+        raise config_option_error(exc, {"n_nodes": args.nodes, "backend": args.backend}) from None
     clip = demo_clip(n_frames=args.frames, size=size)
     print(f"MotionBits bench: {args.frames} frames {size[0]}x{size[1]}, n = "
           f"{config.grid_side ** 2} nodes, flow {config.flow}, backend {config.backend}; "

@@ -7,6 +7,7 @@ import dataclasses
 import itertools
 import json
 import math
+import re
 import sys
 import time
 from pathlib import Path
@@ -93,10 +94,21 @@ def _check_options(args: argparse.Namespace) -> MotionBitsConfig:
         if args.config:
             return load_config(args.config, **flags)
         return config_from_dict(flags, source="options")
-    except (TypeError, ValueError) as exc:  # name the option, not the config field
-        msg = str(exc).replace("MotionBitsConfig.n_nodes", "--nodes").replace(
-            "MotionBitsConfig.max_side", "--max-side")
-        raise InputError(msg) from None
+    except (TypeError, ValueError) as exc:
+        raise config_option_error(exc, flags) from None
+
+
+#: Command-line options that set a config field.
+CONFIG_OPTIONS = {"n_nodes": "--nodes", "max_side": "--max-side", "backend": "--backend"}
+
+
+def config_option_error(exc: Exception, flags: dict) -> InputError:
+    """The config's error, led by the option that set the offending field (if one did)."""
+    msg = str(exc)
+    for field, value in flags.items():
+        if field in CONFIG_OPTIONS and re.search(rf"\b{field}\b", msg):
+            return InputError(f"{CONFIG_OPTIONS[field]} {value}: {msg}")
+    return InputError(msg)
 
 
 def _build_segmenter(config: MotionBitsConfig) -> MotionBitsSegmenter:
