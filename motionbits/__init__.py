@@ -34,6 +34,9 @@ _LAZY: dict[str, str] = {
     "MotionBitsSegmenter": "motionbits.segmenter",
     "segment_video": "motionbits.segmenter",
     "iter_frames": "motionbits.video",
+    "GraspProposal": "motionbits.grasp",
+    "grasp_from_mask": "motionbits.grasp",
+    "grasp_proposals": "motionbits.grasp",
 }
 
 __all__ = [
@@ -58,6 +61,10 @@ __all__ = [
     "labels_from_instances",
     "sample_frame_indices",
     "to_supervision",
+    # top-down grasp proposals from masks (paper Supplement B; loaded on first use)
+    "GraspProposal",
+    "grasp_from_mask",
+    "grasp_proposals",
 ]
 
 
@@ -78,4 +85,5 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs (names are in
     from motionbits.config import MotionBitsConfig  # noqa: F401
     from motionbits.segmenter import (  # noqa: F401
         MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video)
+    from motionbits.grasp import GraspProposal, grasp_from_mask, grasp_proposals  # noqa: F401
     from motionbits.video import iter_frames  # noqa: F401

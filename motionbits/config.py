@@ -57,6 +57,7 @@ _RANGES = {
     "match_iou": "[0, 1]",
     "merge_agree": "[0, inf)",
     "merge_disagree": "[0, inf)",
+    "retire_margin": "[0, inf)",
 }
 
 
@@ -150,6 +151,9 @@ class MotionBitsConfig:
     # some frame), and different bodies for good once it is worse by merge_disagree
     merge_agree: float = 1.5
     merge_disagree: float = 6.0
+    # ours (motionbits/retirement.py): a MotionBit is retired when the static world explains
+    # its pixels better, by this many grey levels, than its own motion since its birth
+    retire_margin: float = 5.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):

@@ -23,14 +23,25 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
             "Needs: pip install motionbits[sim]."
         ),
     )
-    p.add_argument("--track", choices=("robot", "hand"), action="append", required=True,
-                   help="track to generate (repeat for both)")
+    p.add_argument("--track", choices=("robot", "hand", "pickplace"), action="append",
+                   required=True,
+                   help="track to generate (repeat for several): robot, hand (pushes), pickplace "
+                        "(harder: natural textures, shadows, an articulated hand or gripper "
+                        "carries a block across the table while other bodies move)")
     p.add_argument("--scenes", type=int, default=40, metavar="N", help="scenes per track (40)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (0)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (DIR/<track>/...)")
     p.add_argument("--size", default="640x480", metavar="WxH", help="frame size (640x480)")
     p.add_argument("--frames", type=int, default=None, metavar="T",
                    help="frames per clip (default: random 12-16 per scene)")
+    p.add_argument("--camera", default="static",
+                   choices=("static", "pan", "orbit", "shake", "moving"),
+                   help="camera motion (static): pan turns in place, orbit circles the table "
+                        "(parallax), shake is hand-held jitter, moving draws one of the three "
+                        "per scene; a moving camera writes to DIR/<track>-<camera>/")
+    p.add_argument("--flow", action="store_true",
+                   help="also write the exact optical flow of every frame pair, both "
+                        "directions, with visibility masks (flow/NNNNN.npz; see docs/evaluation.md)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace the tracks already in --out (default: refuse; other tracks "
                         "in --out are always kept)")
@@ -61,16 +72,19 @@ def run(args: argparse.Namespace) -> int:
     from motionbits.synth.mujoco_moribo import generate_track
 
     import_mujoco()  # the [sim] extra: fails here, before any output
-    tracks = list(dict.fromkeys(args.track))
-    # each track is written to a temporary folder renamed to --out/TRACK when complete:
-    # never half-written; other tracks already in --out are kept
+    # each track is written to a temporary folder renamed to --out/<track>[-<camera>] when
+    # complete: never half-written; other tracks already in --out are kept
+    names = {t: t if args.camera == "static" else f"{t}-{args.camera}"
+             for t in dict.fromkeys(args.track)}
     with contextlib.ExitStack() as stack:
-        staged = [stack.enter_context(StagedFolder(Path(args.out) / t, overwrite=args.overwrite,
-                                                   replaceable={"scene_*"})) for t in tracks]
-        for track, folder in zip(tracks, staged):
+        staged = {t: stack.enter_context(StagedFolder(Path(args.out) / n, overwrite=args.overwrite,
+                                                      replaceable={"scene_*"}))
+                  for t, n in names.items()}
+        for track, folder in staged.items():
             generate_track(track, args.scenes, args.seed, folder.path, width=w, height=h,
-                           n_frames=args.frames, progress=not args.quiet)
-        for track, folder in zip(tracks, staged):
-            folder.publish(inner=track)
-    print(f"wrote {', '.join(f'{args.out}/{t}' for t in tracks)}")
+                           n_frames=args.frames, progress=not args.quiet, camera=args.camera,
+                           flow=args.flow)
+        for track, folder in staged.items():
+            folder.publish(inner=names[track])
+    print(f"wrote {', '.join(f'{args.out}/{n}' for n in names.values())}")
     return 0
