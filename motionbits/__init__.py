@@ -27,6 +27,7 @@ from motionbits.objects import (
 __version__ = "0.1.0"
 
 _LAZY: dict[str, str] = {
+    "InputError": "motionbits.errors",
     "MotionBitsConfig": "motionbits.config",
     "MotionBit": "motionbits.segmenter",
     "MotionBitsResult": "motionbits.segmenter",
@@ -42,6 +43,7 @@ _LAZY: dict[str, str] = {
 }
 
 __all__ = [
+    "InputError",  # the command line's one-line error
     # the segmenter (loaded on first use)
     "MotionBit",
     "MotionBitsConfig",

@@ -23,6 +23,7 @@ __all__ = [
     "forward_backward_error",
     "sample_maps",
     "pixel_grid",
+    "check_flow",
 ]
 
 
@@ -84,6 +85,32 @@ def make_flow(spec: str | FlowBackend) -> FlowBackend:
         f"unknown flow backend {spec!r}: use 'dis-medium', 'dis-fast', 'dis-ultrafast', "
         "'raft:PATH' (RAFT weights file) or pass a callable flow(prev, next) -> (H, W, 2) array"
     )
+
+
+def check_flow(flow: object, shape: tuple[int, int], backend: object) -> np.ndarray:
+    """Validate what a flow backend returned for two frames of size ``shape`` = (H, W).
+
+    Returns:
+        the flow as an (H, W, 2) float32 array.
+
+    Raises:
+        TypeError / ValueError: not an array, wrong shape, or NaN / infinite values; the
+            message names the backend.
+    """
+    name = getattr(backend, "__name__", None) or repr(backend)
+    if not isinstance(flow, np.ndarray):
+        raise TypeError(f"flow backend {name} returned {type(flow).__name__}, expected an "
+                        f"(H, W, 2) = {(*shape, 2)} numpy array")
+    if flow.shape != (*shape, 2):
+        raise ValueError(f"flow backend {name} returned shape {flow.shape} for frames of "
+                         f"{shape[1]}x{shape[0]}, expected (H, W, 2) = {(*shape, 2)}")
+    if not np.issubdtype(flow.dtype, np.number) or np.issubdtype(flow.dtype, np.complexfloating):
+        raise TypeError(f"flow backend {name} returned dtype {flow.dtype}, expected float32")
+    flow = np.ascontiguousarray(flow, dtype=np.float32)
+    if not np.isfinite(flow).all():
+        raise ValueError(f"flow backend {name} returned NaN or infinite values "
+                         f"({int((~np.isfinite(flow)).sum())} of {flow.size})")
+    return flow
 
 
 @lru_cache(maxsize=4)

@@ -20,7 +20,7 @@ from motionbits.camera import compensate_camera
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
     appearance_consistent, gradient_magnitude, motion_gain, pull_back)
-from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
+from motionbits.flow import FlowBackend, check_flow, forward_backward_error, make_flow, warp_nearest
 from motionbits.graph import (
     apply_temporal_constraints,
     local_covariances,
@@ -42,6 +42,12 @@ from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_mot
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
+
+#: Shortest side, in working pixels, that the default flow (OpenCV DIS) handles.
+MIN_WORK_SIDE = 20
+#: Smaller inputs are upsampled to at most this longest side (the paper's 640x480, where
+#: the pixel parameters hold); ``max_side`` never upsamples beyond max(input, this).
+REFERENCE_SIDE = 640
 
 #: Stage names of the per-frame timing report, in pipeline order.
 STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "merging",
@@ -127,10 +133,17 @@ class MotionBitsSegmenter:
 
     def _start(self, frame: np.ndarray) -> None:
         h, w = frame.shape[:2]
-        scale = self.config.max_side / max(h, w)
+        # longest working side: max_side, but above the input's size only up to
+        # REFERENCE_SIDE (pixel parameters are tuned there): the cost is bounded by design
+        side = min(self.config.max_side, max(h, w, REFERENCE_SIDE))
+        scale = side / max(h, w)
+        hw, ww = self._work_size = (int(round(h * scale)), int(round(w * scale)))
+        if min(hw, ww) < MIN_WORK_SIDE:
+            raise ValueError(
+                f"frame {self.frame_index} is {w}x{h}: at max_side={self.config.max_side} it is "
+                f"processed at {ww}x{hw}, but both sides need at least {MIN_WORK_SIDE} px for "
+                "the optical flow; crop it or raise max_side")
         self._input_size = (h, w)
-        self._work_size = (max(8, int(round(h * scale))), max(8, int(round(w * scale))))
-        hw, ww = self._work_size
         self._grid = NodeGrid.build(hw, ww, self.config.grid_side, self.config.k_neighbors)
         self._seeds = grid_seeds(self._grid.rows, self._grid.cols, self.config.seed_stride)
         self._labels = np.zeros((hw, ww), np.int32)
@@ -204,8 +217,8 @@ class MotionBitsSegmenter:
             return self._empty_result()
         cfg, grid = self.config, self._grid
         with self._stage("flow"):
-            flow_fwd = self.flow(self._prev, cur)
-            flow_back = self.flow(cur, self._prev)
+            flow_fwd = check_flow(self.flow(self._prev, cur), cur.shape[:2], self.flow)
+            flow_back = check_flow(self.flow(cur, self._prev), cur.shape[:2], self.flow)
             # pixels whose backward target leaves the image come back inf or nan (remap
             # interpolates the inf border): treat both as "no reliable flow"
             fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
