@@ -128,6 +128,11 @@ def _build_segmenter(config: MotionBitsConfig) -> MotionBitsSegmenter:
         return MotionBitsSegmenter(config)
     except RuntimeError as exc:  # e.g. --backend torch:cuda without a GPU
         raise InputError(f"--backend {config.backend}: {exc}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    config = _check_options(args)
+    seg = _build_segmenter(config)  # a missing extra (torch) fails here
     gt = None
     if args.input is None:
         from motionbits.synth import demo_clip
