@@ -129,7 +129,7 @@ class MotionBitsConfig:
     # tolerated on texture). Uncovered background fails it and does not inherit a label.
     carry_tolerance: float = 12.0
     carry_gradient: float = 1.0
-    # ours: camera motion compensation (motionbits/camera.py). A similarity transform
+    # ours: camera motion compensation (motionbits/camera.py). A homography
     # fitted to the node flow by RANSAC is taken as the camera's motion when at least
     # this fraction of the reliable nodes are its inliers (1.0 = off) ...
     camera_support: float = 0.5
