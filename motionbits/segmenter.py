@@ -312,10 +312,6 @@ class MotionBitsSegmenter:
         with self._stage("merging"):
             moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
             self._spans.record(moving, self.frame_index)
-            # the twists reported and merged: each moving MotionBit's motion refined on its
-            # own pixels (flow reads rotations low)
-            thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
-                                                  moving)
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
                              first_new, hist_nodes, seen_pts, back_pts, reliability, cur_g,
                              prev_g, disagree=cfg.merge_disagree)
@@ -332,6 +328,10 @@ class MotionBitsSegmenter:
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._prev = cur
+            # the twists reported: each moving MotionBit's motion refined on its own pixels
+            # (flow reads rotations low)
+            thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
+                                                  moving)
             result = build_result(self.frame_index, labels, node_ids, ids, thetas, trans,
                                   moving, rep, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
