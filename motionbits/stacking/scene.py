@@ -118,7 +118,7 @@ def _palette(i: int, rng: np.random.Generator) -> np.ndarray:
 
 def _arrange(rng: np.random.Generator, radii: list[float]) -> list[np.ndarray] | None:
     """Compact, non-overlapping footprint centres (discs of ``radii``) around the cluster
-    centre: each new object touches the arrangement with a 0.5-2.5 cm gap."""
+    centre: each new object sits 1-3 cm (between bounding discs) from one already placed."""
     centre = np.array(CLUSTER_XY)
     placed: list[tuple[np.ndarray, float]] = []
     for r in radii:
@@ -128,8 +128,8 @@ def _arrange(rng: np.random.Generator, radii: list[float]) -> list[np.ndarray] |
             else:
                 anchor, ra = placed[int(rng.integers(len(placed)))]
                 ang = rng.uniform(0, 2 * np.pi)
-                xy = anchor + (ra + r + rng.uniform(0.005, 0.025)) * np.array([np.cos(ang), np.sin(ang)])
-            if abs(xy[0] - centre[0]) > 0.17 or abs(xy[1] - centre[1]) > 0.13:
+                xy = anchor + (ra + r + rng.uniform(0.01, 0.03)) * np.array([np.cos(ang), np.sin(ang)])
+            if abs(xy[0] - centre[0]) > 0.16 or abs(xy[1] - centre[1]) > 0.12:
                 continue
             if all(np.linalg.norm(xy - p) >= r + rp + 0.005 for p, rp in placed):
                 placed.append((xy, r))
@@ -148,7 +148,7 @@ def build_scene(rng: np.random.Generator, *, width: int = 640, height: int = 480
     while True:
         shapes = tuple(shape_names[int(i)] for i in rng.integers(len(shape_names), size=N_OBJECTS))
         cells = tuple(float(rng.uniform(0.03, 0.036)) for _ in names)
-        heights = tuple(float(rng.uniform(0.028, 0.038)) for _ in names)
+        heights = tuple(float(rng.uniform(0.024, 0.03)) for _ in names)
         radii = []
         for sh, cl in zip(shapes, cells):
             c = np.asarray(SHAPES[sh], float)

@@ -135,6 +135,37 @@ class StackSim:
             self._step_once()
         self.hand_pos, self.hand_yaw = target, y1
 
+    def move_down(self, z: float, speed: float = 0.1, blocked: float = 0.006) -> bool:
+        """Lower the hand to height ``z``; stop where something blocks it (the hand lags
+        its target by more than ``blocked`` m). Returns True if it got there."""
+        hand = self.model.body("hand").id
+        start = self.hand_pos.copy()
+        n = max(1, int(round(abs(start[2] - z) / speed / self.model.opt.timestep)))
+        for k in range(1, n + 1):
+            target = start.copy()
+            target[2] = start[2] + (z - start[2]) * k / n
+            self.data.mocap_pos[self.mocap] = target
+            self._step_once()
+            if self.data.xpos[hand][2] - target[2] > blocked:
+                self.hand_pos = self.data.xpos[hand].copy()
+                self.data.mocap_pos[self.mocap] = self.hand_pos
+                return False
+        self.hand_pos = np.array([start[0], start[1], z])
+        return True
+
+    def get_state(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """Full integration state (for replaying one pushed scene with every method)."""
+        spec = self.mj.mjtState.mjSTATE_INTEGRATION
+        state = np.zeros(self.mj.mj_stateSize(self.model, spec))
+        self.mj.mj_getState(self.model, self.data, state, spec)
+        return state, self.hand_pos.copy(), self.hand_yaw
+
+    def set_state(self, saved: tuple[np.ndarray, np.ndarray, float]) -> None:
+        state, self.hand_pos, self.hand_yaw = saved
+        self.hand_pos = self.hand_pos.copy()
+        self.mj.mj_setState(self.model, self.data, state, self.mj.mjtState.mjSTATE_INTEGRATION)
+        self.mj.mj_forward(self.model, self.data)
+
     def place_hand(self, pos, yaw: float = 0.0) -> None:
         """Put the hand somewhere at once (before anything touches it)."""
         self.hand_pos, self.hand_yaw = np.asarray(pos, float), float(yaw)
