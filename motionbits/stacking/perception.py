@@ -96,15 +96,19 @@ class WorldGrasp:
     area_px: int
 
 
-def world_grasp(mask: np.ndarray, points: np.ndarray) -> WorldGrasp | None:
-    """Grasp for one image mask, or None if the mask has no valid 3-D point.
+def world_grasp(mask: np.ndarray, points: np.ndarray, min_height: float = 0.005) -> WorldGrasp | None:
+    """Grasp for one image mask, or None if nothing in it stands on the table.
+
+    The mask's points on the table plane (lower than ``min_height``) are left out first,
+    as grasp planners remove the support surface: only what stands up can be grasped.
 
     Args:
         mask: (H, W) bool, the object in the image.
         points: (H, W, 3) world coordinates of every pixel (:meth:`PinholeCamera.backproject`).
+        min_height: metres above the table (z = 0) a point must be to count.
     """
     pts = points[mask]
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    pts = pts[np.all(np.isfinite(pts), axis=1) & (pts[:, 2] > min_height)]
     if len(pts) == 0:
         return None
     lo = pts[:, :2].min(axis=0) - 4 * BEV_RES

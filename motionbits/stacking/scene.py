@@ -161,16 +161,24 @@ def build_scene(rng: np.random.Generator, *, width: int = 640, height: int = 480
         _composite(s, n, SHAPES[sh], cl, h, xy, float(rng.uniform(0, np.pi)), rng)
         for n, sh, cl, h, xy in zip(names, shapes, cells, heights, centres)
     ]
-    tmat = s.material(kind="flat", rgb=np.array([0.62, 0.6, 0.57]) + rng.uniform(-0.05, 0.05, 3),
-                      repeat=1.0, cube=False)
-    fmat = s.material(kind="checker", rgb=np.array([0.3, 0.3, 0.32]), repeat=8.0, cube=False)
+    # Table and floor: one colour each with fine, faint speckle -- texture for optical flow,
+    # too fine and faint to form regions of their own for a colour segmenter.
+    table_rgb = np.array([0.62, 0.6, 0.57]) + rng.uniform(-0.05, 0.05, 3)
+    s.assets.append(f'<texture name="tabletex" type="2d" builtin="flat" rgb1="{fmt(*table_rgb)}" '
+                    f'rgb2="{fmt(*table_rgb)}" mark="random" random="0.4" '
+                    f'markrgb="{fmt(*(table_rgb * 0.8))}" width="256" height="256"/>'
+                    '<material name="tablemat" texture="tabletex" texrepeat="2 2" specular="0.1"/>'
+                    '<texture name="floortex" type="2d" builtin="flat" rgb1="0.3 0.3 0.32" '
+                    'rgb2="0.3 0.3 0.32" mark="random" random="0.4" markrgb="0.22 0.22 0.24" '
+                    'width="512" height="512"/>'
+                    '<material name="floormat" texture="floortex" texrepeat="4 4"/>')
     pos, xyaxes = camera.pose()
     hx, hy = TABLE_HALF
     world = [
         '<light name="key" pos="0.3 -0.6 1.6" dir="-0.2 0.35 -1" diffuse="0.6 0.6 0.6" castshadow="false"/>',
         '<light name="fill" pos="-0.6 0.4 1.4" dir="0.4 -0.2 -1" diffuse="0.3 0.3 0.3" castshadow="false"/>',
-        f'<geom name="floor" type="plane" pos="0 0 -0.75" size="3 3 0.1" material="{fmat}"/>',
-        f'<geom name="table" type="box" pos="0 0 -0.02" size="{fmt(hx, hy, 0.02)}" material="{tmat}" '
+        '<geom name="floor" type="plane" pos="0 0 -0.75" size="3 3 0.1" material="floormat"/>',
+        f'<geom name="table" type="box" pos="0 0 -0.02" size="{fmt(hx, hy, 0.02)}" material="tablemat" '
         'friction="0.6 0.02 0.0005"/>',
         f'<camera name="cam" pos="{fmt(*pos)}" xyaxes="{fmt(*xyaxes)}" fovy="{camera.fovy_deg:.3f}"/>',
         *bodies,
@@ -199,7 +207,7 @@ def build_scene(rng: np.random.Generator, *, width: int = 640, height: int = 480
 def _gripper(s: MJCFScene) -> str:
     """The hand (dynamic, gravity-compensated, welded to the mocap body ``hand_target``);
     its origin is the fingertips' centre. Fingers close along the hand's x."""
-    dark = s.material(kind="flat", rgb=np.array([0.18, 0.18, 0.2]), repeat=1.0)
+    dark = s.material(kind="noise", rgb=np.array([0.25, 0.25, 0.28]), repeat=3.0)
     metal = s.material(kind="gradient", rgb=np.array([0.7, 0.7, 0.72]), repeat=1.0)
     finger = (f'type="box" size="{fmt(0.006, 0.013, FINGER_LEN / 2)}" material="{metal}" '
               'friction="1.5 0.05 0.001" condim="4" density="1000" '
@@ -209,7 +217,7 @@ def _gripper(s: MJCFScene) -> str:
         '<body name="hand_target" mocap="true" pos="0.35 -0.3 0.45"/>'
         '<body name="hand" pos="0.35 -0.3 0.45" gravcomp="1"><freejoint name="hand"/>'
         f'<geom type="box" pos="{fmt(0, 0, fl + 0.012)}" size="{fmt(FINGER_MAX + 0.02, 0.018, 0.012)}" material="{dark}"/>'
-        f'<geom type="cylinder" pos="{fmt(0, 0, fl + 0.1)}" size="0.025 0.08" material="{dark}"/>'
+        f'<geom type="cylinder" pos="{fmt(0, 0, fl + 0.06)}" size="0.02 0.04" material="{dark}"/>'
         '<body name="finger_l" gravcomp="1"><joint name="finger_l" type="slide" axis="-1 0 0" range="0 '
         f'{FINGER_MAX}" damping="40" armature="0.5"/><geom pos="{fmt(-0.006, 0, fl / 2)}" {finger}/></body>'
         '<body name="finger_r" gravcomp="1"><joint name="finger_r" type="slide" axis="1 0 0" range="0 '

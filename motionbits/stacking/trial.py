@@ -44,8 +44,10 @@ class TrialConfig:
     height: int = 480
     frame_dt: float = 0.1  # s between recorded frames (10 fps)
     push_speed: float = 0.08  # m/s
+    transit_speed: float = 0.25  # m/s of the gripper between pushes (~2.5 cm per frame)
     push_dist: tuple[float, float] = (0.03, 0.05)  # m, drawn per object
     min_mask_px: int = 150  # masks smaller than this are ignored (specks)
+    min_object_height: float = 0.01  # m: masks whose points are all lower are skipped
     finger_depth: float = 0.018  # m the fingertips go below an object's top
     finger_margin: float = 0.012  # m between an open finger and the object's extent
     carry_clearance: float = 0.06  # m above the tower top while carrying
@@ -160,14 +162,14 @@ def push_scene(seed: int, index: int, config: TrialConfig = TrialConfig()) -> Pu
         p0, m0 = sim.object_pos(), sim.data.xmat[sim.object_ids].copy()
         frames: list[np.ndarray] = [sim.rgb()]
         sim.recorder = frames.append
-        z_push, z_air = 0.01, 0.08
+        z_push, z_air = 0.01, 0.07
         for start, end in _push_plan(sim, rng, config):
             yaw = _nearest_yaw(sim.hand_yaw, math.atan2(end[1] - start[1], end[0] - start[0]))
-            sim.move([start[0], start[1], z_air], yaw, speed=0.4)
-            sim.move([start[0], start[1], z_push], speed=0.3)
+            sim.move([start[0], start[1], z_air], yaw, speed=config.transit_speed)
+            sim.move([start[0], start[1], z_push], speed=config.transit_speed)
             sim.move([end[0], end[1], z_push], speed=config.push_speed)
-            sim.move([end[0], end[1], z_air], speed=0.3)
-        sim.move([sim.hand_pos[0], 0.05, 0.6], speed=0.5)  # up and out of view
+            sim.move([end[0], end[1], z_air], speed=config.transit_speed)
+        sim.move([sim.hand_pos[0], 0.05, 0.6], speed=config.transit_speed)  # up, out of view
         sim.step(0.2)
         sim.recorder = None
         p1, m1 = sim.object_pos(), sim.data.xmat[sim.object_ids]
@@ -249,8 +251,11 @@ def run_trial(method: str, labels_fn: LabelsFn | None, pushed: PushedScene,
         masks = _masks(labels, config.min_mask_px)
         res.n_masks = len(masks)
         grasps = [world_grasp(m, points) for m in masks]
+        # a mask with nothing standing in it (bare table, floor, wall) is not graspable
+        grasps = [g for g in grasps if g is not None and g.top >= config.min_object_height]
+        res.log.append(f"{len(masks)} masks, {len(grasps)} with something standing in them")
         sim.recorder = video
-        _stack(sim, [g for g in grasps if g is not None], points, config, res)
+        _stack(sim, grasps, points, config, res)
         sim.recorder = None
     finally:
         sim.close()
