@@ -43,11 +43,9 @@ def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.
     q = back_points[reliable].astype(np.float32)
     if len(p) < max(8, support * len(points) * 0.5):
         return None
-    a, inl = cv2.estimateAffinePartial2D(p, q, method=cv2.RANSAC,
-                                         ransacReprojThreshold=threshold, maxIters=500)
-    if a is None or inl is None or inl.mean() < support:
+    h, inl = cv2.findHomography(p, q, cv2.RANSAC, threshold, maxIters=500)
+    if h is None or inl is None or inl.mean() < support:
         return None
-    h = np.vstack([a, [0.0, 0.0, 1.0]])
     moved = cv2.perspectiveTransform(points[None].astype(np.float64), h)[0]
     if np.median(np.linalg.norm(moved - points, axis=1)) <= min_shift:
         return None

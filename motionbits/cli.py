@@ -13,6 +13,7 @@ COMMAND_MODULES = (
     "motionbits.commands.eval",
     "motionbits.commands.synth",
     "motionbits.commands.benchmark",
+    "motionbits.commands.scenes",
     "motionbits.commands.stack",
 )
 

@@ -65,6 +65,12 @@ class MotionBitsConfig:
     # better than "static" by this many grey levels on average (0 = off): textureless
     # regions get flow smeared in from moving edges, which is no evidence of motion
     motion_evidence: float = 1.0
+    # ours: a label carried from the last frame holds a pixel only where the flow's
+    # correspondence explains its appearance: mean |I_t - I_t-1 pulled back| (5x5) below
+    # carry_tolerance grey levels + carry_gradient x the local gradient (px of flow error
+    # tolerated on texture). Uncovered background fails it and does not inherit a label.
+    carry_tolerance: float = 12.0
+    carry_gradient: float = 1.0
     # ours: camera motion compensation (motionbits/camera.py). A similarity transform
     # fitted to the node flow by RANSAC is taken as the camera's motion when at least
     # this fraction of the reliable nodes are its inliers (1.0 = off) ...
@@ -76,7 +82,19 @@ class MotionBitsConfig:
     min_cluster_nodes: int = 4  # clusters with fewer nodes are noise
     prior_bonus: float = 0.35  # px: residual credit for keeping last frame's label
     photo_weight: float = 0.1  # px of mask cost per grey level of photometric residual
+    # ours: a pixel's flow residual counts fully where its image gradient reaches this many
+    # grey levels per px, proportionally less on flatter pixels (their flow is interpolated)
+    flow_texture: float = 4.0
+    # ours: a pixel's carried MotionBit label is credited (prior_bonus) only where the
+    # MotionBit's motion once explained that pixel better than "static" by this many grey
+    # levels (3x3 mean) -- a label smeared onto a flat static region does not persist
+    pixel_evidence: float = 3.0
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
+    # ours (motionbits/merging.py): touching MotionBits are one body when one affine motion
+    # explains the images of both within merge_agree grey levels of their own motions (at
+    # some frame), and different bodies for good once it is worse by merge_disagree
+    merge_agree: float = 1.5
+    merge_disagree: float = 6.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
@@ -100,13 +118,19 @@ class MotionBitsConfig:
             "flow_noise": self.flow_noise > 0,
             "move_threshold": self.move_threshold > 0,
             "motion_evidence": self.motion_evidence >= 0,
+            "carry_tolerance": self.carry_tolerance > 0,
+            "carry_gradient": self.carry_gradient >= 0,
             "camera_support": 0.0 < self.camera_support <= 1.0,
             "camera_threshold": self.camera_threshold > 0,
             "camera_min_shift": self.camera_min_shift >= 0,
             "min_cluster_nodes": self.min_cluster_nodes >= 1,
             "prior_bonus": self.prior_bonus >= 0,
             "photo_weight": self.photo_weight >= 0,
+            "flow_texture": self.flow_texture > 0,
+            "pixel_evidence": self.pixel_evidence >= 0,
             "match_iou": 0.0 <= self.match_iou <= 1.0,
+            "merge_agree": self.merge_agree >= 0,
+            "merge_disagree": self.merge_disagree >= self.merge_agree,
         }
         bad = [name for name, ok in checks.items() if not ok]
         if bad:

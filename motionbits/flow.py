@@ -45,7 +45,7 @@ class DISFlow:
 
     Args:
         preset: ``"ultrafast"``, ``"fast"`` or ``"medium"``. MEDIUM is the default: the
-            faster presets are too noisy for local rotation estimates (DESIGN.md section 2).
+            faster presets are too noisy for local rotation estimates.
     """
 
     def __init__(self, preset: str = "medium") -> None:

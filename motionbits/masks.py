@@ -16,7 +16,7 @@ from scipy import ndimage
 from motionbits.nodes import NodeGrid
 from motionbits.twists import kabsch_2d
 
-__all__ = ["fit_cluster_motions", "assign_pixels", "remove_specks"]
+__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks"]
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,
@@ -94,15 +94,18 @@ def _photometric_cost(cur: np.ndarray, prev: np.ndarray, theta: float, t: np.nda
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
                   trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
-                  prev_gray: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray, *,
-                  bonus: float, photo_weight: float, kept: np.ndarray, ambiguous: float
-                  ) -> np.ndarray:
+                  prev_gray: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
+                  texture: np.ndarray, earned: np.ndarray, *, bonus: float, photo_weight: float,
+                  evidence: float, kept: np.ndarray, ambiguous: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Label every pixel by the motion that best explains it.
 
-    The cost of a motion at a pixel is its flow residual (px) plus ``photo_weight`` times
-    its photometric residual (grey levels, 3x3 mean): flow is smooth across motion
-    boundaries, the images are not, so the photometric term puts the boundary where the
-    texture says it is.
+    The cost of a motion at a pixel is its flow residual (px), weighted by how much texture
+    the pixel has, plus ``photo_weight`` times its photometric residual (grey levels, 3x3
+    mean): flow is smooth across motion boundaries and interpolated over textureless
+    regions, the images are not, so the photometric term puts the boundary where the
+    texture says it is. Holes of a label's mask that no other
+    label fills (a textureless interior) are filled: a rigid body's image has no holes.
 
     Args:
         grid: the node grid (its image size is the working resolution).
@@ -113,8 +116,17 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         cur_gray, prev_gray: (H, W) float32 grey frames.
         prior: (H, W) int32 last frame's label map carried to this frame.
         prior_valid: (H, W) bool, where ``prior`` is trustworthy (consistent flow).
+        texture: (H, W) float32 in [0, 1], weight of the flow residual (1 = textured pixel
+            whose flow is measured, 0 = flat pixel whose flow is interpolated).
+        earned: (H, W) bool, carried like ``prior``: where the pixel's MotionBit once
+            explained its images better than "static" by ``evidence`` grey levels. Only
+            there does a carried MotionBit label get the credit against the background: a
+            label smeared onto a flat region, where motion is not observable, does not
+            persist on its own (against another MotionBit it keeps the credit).
         bonus: cost credited to the prior's label.
         photo_weight: px of cost per grey level of photometric residual.
+        evidence: grey levels (3x3 mean) by which a label's motion must beat "static" at a
+            pixel to earn it.
         kept: ids of earlier MotionBits without a cluster now (e.g. bodies that stopped);
             they compete with the static motion on their prior pixels.
         ambiguous: px; where a cluster's motion moves a pixel less than this, the motion
@@ -122,15 +134,20 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
             node-level cluster label gets the same credit as the prior.
 
     Returns:
-        (H, W) int32 label map.
+        (H, W) int32 label map and the (H, W) bool ``earned`` map of this frame.
     """
     h, w = flow_back.shape[:2]
     window = 3
+    static_photo = cv2.blur(np.abs(cur_gray - prev_gray), (window, window))
+    static_cost = texture * cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + (
+        photo_weight * static_photo)
+    # last frame's label is credited where it was carried consistently; against the
+    # background, a MotionBit's label only where its motion once showed in the images
+    # (``earned``): elsewhere the background gets the same credit
     credit = np.where(prior_valid, bonus, 0.0).astype(np.float32)
-    static_cost = cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + photo_weight * cv2.blur(
-        np.abs(cur_gray - prev_gray), (window, window))
-    best = static_cost - credit * (prior == 0)
+    best = static_cost - credit * ((prior == 0) | ~earned)
     out = np.zeros((h, w), np.int32)
+    shown = np.zeros((h, w), bool)
     node_map = grid.to_image(node_labels.astype(np.int32))
     for lab in kept:
         on = (prior == lab) & prior_valid
@@ -138,6 +155,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         better = on & (cost < best)
         best[better] = cost[better]
         out[better] = lab
+        shown[better] = True
     for lab, th, t in zip(labels, thetas, trans):
         support = _support_box(grid, node_labels, lab)
         if support is None:
@@ -155,10 +173,26 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         resid = np.hypot(mx - flow_back[ys, xs, 0], my - flow_back[ys, xs, 1])
         still = np.hypot(mx, my) < ambiguous
         own = ((prior[ys, xs] == lab) & prior_valid[ys, xs]) | (still & (node_map[ys, xs] == lab))
-        cost = resid + photo_weight * photo - bonus * own
+        cost = texture[ys, xs] * resid + photo_weight * photo - bonus * own
         better = cost < best[ys, xs]
-        best[ys[better], xs[better]] = cost[better]
-        out[ys[better], xs[better]] = lab
+        by, bx = ys[better], xs[better]
+        best[by, bx] = cost[better]
+        out[by, bx] = lab
+        gain = static_photo[by, bx] - photo[better]
+        shown[by, bx] = (gain > evidence) | (earned[by, bx] & (prior[by, bx] == lab))
+    out = fill_holes(out)
+    return out, shown & (out > 0)
+
+
+def fill_holes(label_map: np.ndarray) -> np.ndarray:
+    """Background pixels enclosed by one label take that label; (H, W) int32."""
+    out = label_map.copy()
+    for i, box in enumerate(ndimage.find_objects(label_map)):
+        if box is None:
+            continue
+        sub = out[box]
+        hole = ndimage.binary_fill_holes(label_map[box] == i + 1) & (sub == 0)
+        sub[hole] = i + 1
     return out
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from contextlib import contextmanager
 from functools import cache
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterator
 
 import cv2
@@ -17,13 +17,9 @@ from threadpoolctl import ThreadpoolController
 from motionbits.backend import make_ops
 from motionbits.camera import compensate_flow, fit_camera_motion, stabilize_previous
 from motionbits.config import MotionBitsConfig
-from motionbits.flow import (
-    FlowBackend,
-    forward_backward_error,
-    make_flow,
-    sample_maps,
-    warp_nearest,
-)
+from motionbits.evidence import (
+    appearance_consistent, gradient_magnitude, motion_gain, pull_back)
+from motionbits.flow import FlowBackend, forward_backward_error, make_flow, warp_nearest
 from motionbits.graph import (
     apply_temporal_constraints,
     local_covariances,
@@ -33,8 +29,11 @@ from motionbits.graph import (
 )
 from motionbits.identity import match_ids, refine_history
 from motionbits.masks import assign_pixels, fit_cluster_motions, remove_specks
+from motionbits.merging import (
+    MotionBitGroups, fit_affine, rigid_matrix, stillness_visible, touching_pairs, union_excess)
 from motionbits.mcl import markov_cluster_coarse, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
+from motionbits.objects import Instance, encode_rle
 from motionbits.propagation import grid_seeds
 from motionbits.twists import fit_local_motions, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
@@ -42,32 +41,15 @@ from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
 
 #: Stage names of the per-frame timing report, in pipeline order.
-STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "bookkeeping")
+STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "merging",
+          "bookkeeping")
 
 
-@dataclass(frozen=True)
-class MotionBit:
-    """One MotionBit in one frame (coordinates in input pixels).
-
-    Attributes:
-        id: stable id (> 0), kept across frames.
-        area: pixels in the mask.
-        bbox: (x0, y0, x1, y1), inclusive-exclusive.
-        centroid: (x, y).
-        twist: (omega rad/frame, v_x, v_y px/frame) spatial twist of the motion from the
-            previous frame, about the image origin; zeros when it has no cluster this frame.
-        moving: whether it moved between the previous frame and this one.
-        first_moved, last_moved: frame indices of its first and latest motion.
-    """
-
-    id: int
-    area: int
-    bbox: tuple[int, int, int, int]
-    centroid: tuple[float, float]
-    twist: tuple[float, float, float]
-    moving: bool
-    first_moved: int
-    last_moved: int
+#: One MotionBit in one frame: the shared :class:`motionbits.Instance` with ``twist``,
+#: ``moving``, ``first_moved`` and ``last_moved`` set (coordinates in input pixels; the
+#: twist is zeros when it has no cluster this frame). ``update`` leaves ``mask`` unset
+#: (the label map holds it): :meth:`MotionBitsResult.instances` attaches masks.
+MotionBit = Instance
 
 
 @dataclass
@@ -91,6 +73,16 @@ class MotionBitsResult:
     @property
     def ids(self) -> list[int]:
         return [mb.id for mb in self.motionbits]
+
+    def instances(self, rle: bool = False) -> list[Instance]:
+        """``motionbits`` with their (H, W) bool masks from ``labels`` (or COCO RLE when
+        ``rle``; extra ``coco``); ``motionbits.to_supervision`` takes the result."""
+        return [replace(mb, mask=None if rle else self.labels == mb.id,
+                        rle=encode_rle(self.labels == mb.id) if rle else None)
+                for mb in self.motionbits]
+
+
+_STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # the identity motion
 
 
 def _gray(frame: np.ndarray) -> np.ndarray:
@@ -137,9 +129,12 @@ class MotionBitsSegmenter:
         self._prev: np.ndarray | None = None
         self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
         self._history: np.ndarray | None = None  # (h, w) int32 meet of all label partitions
+        self._earned: np.ndarray | None = None  # (h, w) int32 evidence of the labels (masks)
         self._past_max: np.ndarray | None = None  # (n, k) largest earlier edge weights
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
+        self._tentative: set[int] = set()  # ids born at the last frame, not yet confirmed
+        self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._first_moved: dict[int, int] = {}
         self._last_moved: dict[int, int] = {}
         self._timings: dict[str, float] = {}
@@ -161,6 +156,7 @@ class MotionBitsSegmenter:
         self._seeds = grid_seeds(self._grid.rows, self._grid.cols, self.config.seed_stride)
         self._labels = np.zeros((hw, ww), np.int32)
         self._history = np.zeros((hw, ww), np.int32)
+        self._earned = np.zeros((hw, ww), np.int32)  # 1 = its MotionBit showed there
         self._past_max = np.zeros(self._grid.neighbors.shape)
         self._noise_cov = twist_noise_covariance(self._grid.points, self._grid.neighbors,
                                                  self.config.flow_noise)
@@ -177,6 +173,21 @@ class MotionBitsSegmenter:
         g = self._grid
         return MotionBitsResult(self.frame_index, np.zeros((h, w), np.int32), [],
                                 np.zeros((g.rows, g.cols), np.int32), dict(self._timings))
+
+    @property
+    def backend(self) -> str:
+        """Where the heavy steps run: ``"numpy"`` or ``"torch:<device>"`` (resolved)."""
+        return self._ops.name
+
+    def __call__(self, frames: FrameSource) -> list[np.ndarray]:
+        """Segment one whole video from its first frame: one (H, W) int32 label map per
+        frame (the ``frames -> label maps`` interface of ``somprompt.GroundedVQA``).
+
+        Resets the stream first, so each call is a new video. ``frames``: anything
+        :func:`motionbits.video.iter_frames` reads (file, folder, array, frames).
+        """
+        self.reset()
+        return [self.update(frame).labels for frame in iter_frames(frames)]
 
     # ------------------------------------------------------------------ main step
     def update(self, frame: np.ndarray) -> MotionBitsResult:
@@ -220,9 +231,18 @@ class MotionBitsSegmenter:
             fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
                                    nan=1e3, posinf=1e3)
             # last frame's labels and label history, carried to this frame
-            prior_valid = fb_err < cfg.fb_sigma
-            carried = warp_nearest(np.dstack([self._labels, self._history]), flow_back)
-            prior, history = carried[..., 0], carried[..., 1]
+            cur_g, prev_g = _gray(cur), _gray(self._prev)
+            pulled = pull_back(prev_g, flow_back)
+            gradient = gradient_magnitude(cur_g)
+            # a carried label holds a pixel only where the flow is consistent both ways and
+            # its correspondence explains the pixel's appearance: uncovered background
+            # does not inherit the label of the body that uncovered it
+            prior_valid = (fb_err < cfg.fb_sigma) & appearance_consistent(
+                cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
+                gradient_gain=cfg.carry_gradient)
+            carried = warp_nearest(np.dstack([self._labels, self._history, self._earned]),
+                                   flow_back)
+            prior, history, earned = carried[..., 0], carried[..., 1], carried[..., 2] > 0
 
         with self._stage("twists"):
             pts = grid.points
@@ -293,25 +313,67 @@ class MotionBitsSegmenter:
                 node_cluster[active_idx[members]] = cluster + node_cluster.max()
 
         with self._stage("masks"):
-            cur_g, prev_g = _gray(cur), _gray(prev_m)
+            if prev_m is not self._prev:  # the camera-stabilised frame ("nothing moved");
+                prev_g = _gray(prev_m)  # pulling it back along flow_m gives ``pulled`` again
             # computed only if some cluster is a candidate for a new MotionBit
-            evidence = cache(lambda: self._photometric_evidence(cur_g, prev_g, flow_m, ix))
+            win = max(3, int(round(max(grid.cell))) | 1)
+            evidence = cache(lambda: motion_gain(cur_g, prev_g, pulled, win)[ix[:, 1], ix[:, 0]])
+            first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, thetas, trans = self._identify(
                 node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability,
                 evidence)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
-            labels = assign_pixels(
+            kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
+            labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
-                prior, prior_valid, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
-                kept=kept, ambiguous=cfg.move_threshold)
+                prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
+                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
+                evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(2 * cw * ch)))
+
+        with self._stage("merging"):
+            moving = self._record_motion(node_ids, ids, thetas, trans, pts)
+            own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
+            reach = int(np.ceil(max(grid.cell)))
+            # born out of pixels that were in view and had never been in a MotionBit
+            margin = 2 * max(grid.cell)
+            in_view = np.all((seen_pts >= margin) & (seen_pts < np.array(
+                [grid.width, grid.height]) - margin), axis=1)
+            born = {int(i) for i in ids[ids >= first_new]
+                    if np.mean((hist_nodes == 0) & in_view, where=node_ids == i) > 0.5}
+            for a, b in touching_pairs(labels, reach=reach):
+                if self._groups.known(a, b):
+                    continue
+                for x, y in ((a, b), (b, a)):
+                    # x was born out of pixels that had never been in a MotionBit while y
+                    # moved, and y's motion would have shown on them: a different body (the
+                    # pushed block is not the gripper that pushes it)
+                    if x in born and y < first_new and y in own and y in moving:
+                        if stillness_visible(labels, x, own[y], cur_g) > cfg.merge_disagree:
+                            self._groups.forbid(x, [y])
+                if self._groups.known(a, b) or (a not in own and b not in own):
+                    continue
+                sel = (node_ids == a) | (node_ids == b)
+                union = fit_affine(pts[sel], back_pts[sel], reliability[sel])
+                # a member without motion this frame (it stopped) stands still; standing
+                # still beside a mover can show that they differ, never that they agree
+                excess = union_excess(labels, a, b, own.get(a, _STILL), own.get(b, _STILL),
+                                      union, cur_g, prev_g)
+                if (a in own and b in own) or excess > cfg.merge_disagree:
+                    self._groups.observe(a, b, excess)
+            rep = self._groups.representatives(np.unique(labels[labels > 0]))
+            # a MotionBit born this frame is shown once it moves again, or as part of a
+            # group that is already shown
+            shown = {r for i, r in rep.items() if i not in self._tentative}
+            rep = {i: r if r in shown else 0 for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
             self._history = refine_history(history, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
+            self._earned = (earned & (labels > 0)).astype(np.int32)
             self._prev = cur
-            result = self._result(labels, node_ids, ids, thetas, trans, pts)
+            result = self._result(labels, node_ids, ids, thetas, trans, moving, rep)
         result.timings = dict(self._timings)
         return result
 
@@ -330,26 +392,6 @@ class MotionBitsSegmenter:
             prior_nodes != 0)
         grown = ndimage.binary_dilation(seed.reshape(g.rows, g.cols), np.ones((5, 5), bool))
         return np.flatnonzero(ndimage.binary_fill_holes(grown))
-
-    def _photometric_evidence(self, cur_g: np.ndarray, prev_g: np.ndarray, flow_back: np.ndarray,
-                              ix: np.ndarray) -> np.ndarray:
-        """Grey levels by which the flow explains each node's neighbourhood better than
-        "nothing moved": mean |I_t - I_t-1| minus mean |I_t - I_t-1 pulled back by the flow|
-        over a window of one grid cell.
-
-        Motion is only observable where the image changes: on textureless regions (a white
-        table, a plain wall) the flow is interpolated from nearby edges -- often from a
-        moving body next to them -- and both hypotheses explain the pixels equally well, so
-        the evidence is ~0. Uniform interiors of moving bodies get ~0 too, so the test
-        is made per cluster (mean over its nodes), not per node.
-        """
-        grid = self._grid
-        map_x, map_y = sample_maps(flow_back)
-        pulled = cv2.remap(prev_g, map_x, map_y, interpolation=cv2.INTER_LINEAR,
-                           borderMode=cv2.BORDER_REPLICATE)
-        win = max(3, int(round(max(grid.cell))) | 1)
-        gain = cv2.blur(np.abs(cur_g - prev_g) - np.abs(cur_g - pulled), (win, win))
-        return gain[ix[:, 1], ix[:, 0]]
 
     def _project_past_max(self, back_pts: np.ndarray) -> np.ndarray:
         """Largest earlier weight of each current edge, read from the graph of the previous
@@ -423,15 +465,21 @@ class MotionBitsSegmenter:
                     == ndimage.minimum_filter(grid, 3, mode="nearest")).ravel()
         has_interior = np.bincount(cluster[interior], minlength=len(big) + 1) > 0
         ids = []
+        newborn = set()
         for c in range(1, len(big) + 1):
+            moves = np.median(displacement[cluster == c]) > cfg.move_threshold
             if c in matched:
-                ids.append(matched[c])
-            elif (has_interior[c] and np.median(displacement[cluster == c]) > cfg.move_threshold
+                i = matched[c]
+                # a MotionBit born last frame stands only if it moves again now
+                ids.append(i if i not in self._tentative or moves else 0)
+            elif (has_interior[c] and moves
                   and np.mean(evidence()[cluster == c]) > cfg.motion_evidence):
                 ids.append(self._next_id)
+                newborn.add(self._next_id)
                 self._next_id += 1
             else:
                 ids.append(0)
+        self._tentative = newborn
         ids = np.asarray(ids, np.int64)
         node_ids = np.concatenate([[0], ids])[cluster]
         ids = ids[ids > 0]
@@ -439,31 +487,48 @@ class MotionBitsSegmenter:
                                             cfg.ransac_threshold)
         return node_ids, ids, thetas, trans
 
-    def _result(self, labels, node_ids, ids, thetas, trans, pts) -> MotionBitsResult:
+    def _record_motion(self, node_ids, ids, thetas, trans, pts) -> set[int]:
+        """Ids whose fitted motion moves their nodes by more than ``move_threshold`` (mean)
+        this frame; updates their first / last frame of motion."""
+        moving = set()
+        for lab, th, t in zip(ids, thetas, trans):
+            c, s = np.cos(th), np.sin(th)
+            p = pts[node_ids == lab]
+            moved = p @ np.array([[c, s], [-s, c]]) + t - p
+            if float(np.mean(np.linalg.norm(moved, axis=1))) > self.config.move_threshold:
+                moving.add(int(lab))
+                self._first_moved.setdefault(int(lab), self.frame_index)
+                self._last_moved[int(lab)] = self.frame_index
+        return moving
+
+    def _result(self, labels, node_ids, ids, thetas, trans, moving, rep) -> MotionBitsResult:
+        """Records of the MotionBits shown: each group of merged ids under its oldest id,
+        with the twist of its largest member that has a motion this frame."""
         grid = self._grid
         h, w = self._input_size
         scale = w / grid.width, h / grid.height
+        lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1)
+        for i, r in rep.items():
+            lut[i] = r
+        out = lut[labels].astype(np.int32)
+        node_out = lut[np.minimum(node_ids, len(lut) - 1)] * (node_ids < len(lut))
+        members: dict[int, list[int]] = {}
+        for i, r in rep.items():
+            members.setdefault(r, []).append(i)
+        counts = np.bincount(node_ids, minlength=len(lut))
         twists = {int(i): -se2_log(th, t) for i, th, t in zip(ids, thetas, trans)}
-        out = labels
-        if (h, w) != labels.shape:
-            out = cv2.resize(labels, (w, h), interpolation=cv2.INTER_NEAREST)
+        if (h, w) != out.shape:
+            out = cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)
         records = []
         for index, box in enumerate(ndimage.find_objects(out)):
             if box is None:
                 continue
             lab = index + 1
-            tw = twists.get(lab, np.zeros(3))
-            sel = node_ids == lab
-            moving = False
-            if sel.any():
-                th, t = thetas[ids == lab][0], trans[ids == lab][0]
-                c, s = np.cos(th), np.sin(th)
-                p = pts[sel]
-                moved = p @ np.array([[c, s], [-s, c]]) + t - p
-                moving = float(np.mean(np.linalg.norm(moved, axis=1))) > self.config.move_threshold
-            if moving:
-                self._first_moved.setdefault(lab, self.frame_index)
-                self._last_moved[lab] = self.frame_index
+            group = members.get(lab, [lab])
+            with_motion = [i for i in group if i in twists]
+            tw = twists[max(with_motion, key=lambda i: counts[i])] if with_motion else np.zeros(3)
+            first = [self._first_moved[i] for i in group if i in self._first_moved]
+            last = [self._last_moved[i] for i in group if i in self._last_moved]
             ys, xs = np.nonzero(out[box] == lab)
             ys, xs = ys + box[0].start, xs + box[1].start
             records.append(MotionBit(
@@ -471,12 +536,12 @@ class MotionBitsSegmenter:
                 bbox=(box[1].start, box[0].start, box[1].stop, box[0].stop),
                 centroid=(float(xs.mean()), float(ys.mean())),
                 twist=(float(tw[0]), float(tw[1] * scale[0]), float(tw[2] * scale[1])),
-                moving=moving,
-                first_moved=self._first_moved.get(lab, self.frame_index),
-                last_moved=self._last_moved.get(lab, self.frame_index),
+                moving=any(i in moving for i in group),
+                first_moved=min(first, default=self.frame_index),
+                last_moved=max(last, default=self.frame_index),
             ))
         return MotionBitsResult(self.frame_index, out, records,
-                                node_ids.reshape(grid.rows, grid.cols).astype(np.int32))
+                                node_out.reshape(grid.rows, grid.cols).astype(np.int32))
 
 
 def segment_video(source: FrameSource, config: MotionBitsConfig | None = None, *,

@@ -10,6 +10,8 @@ import cv2
 import numpy as np
 from PIL import Image
 
+from motionbits.frames import as_rgb_array
+
 __all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
@@ -20,32 +22,15 @@ FrameSource = Union[str, os.PathLike, np.ndarray, Iterable[np.ndarray]]
 def as_rgb_frame(frame: np.ndarray, *, name: str = "frame") -> np.ndarray:
     """Validate one frame and return it as a contiguous (H, W, 3) uint8 RGB array.
 
-    Accepted: (H, W, 3) uint8 RGB; (H, W) or (H, W, 1) uint8 grayscale (replicated to
-    three channels); (H, W, 4) uint8 RGBA (alpha dropped). Anything else raises
+    Accepted as everywhere in the toolkit (:func:`motionbits.frames.as_rgb_array`):
+    (H, W, 3) uint8 RGB, (H, W) or (H, W, 1) uint8 greyscale, (H, W, 4) uint8 RGBA, PIL
+    images; the segmenter also needs at least 8x8 pixels. Anything else raises
     ``ValueError`` / ``TypeError`` saying what was wrong.
     """
-    if not isinstance(frame, np.ndarray):
-        raise TypeError(f"{name} must be a numpy array, got {type(frame).__name__}")
-    if frame.dtype != np.uint8:
-        hint = (
-            " (float images: np.clip(img * 255, 0, 255).astype(np.uint8))"
-            if np.issubdtype(frame.dtype, np.floating) else ""
-        )
-        raise TypeError(f"{name} must be uint8 RGB, got dtype {frame.dtype}{hint}")
-    if frame.ndim == 3 and frame.shape[2] == 1:
-        frame = frame[..., 0]
-    if frame.ndim == 2:
-        frame = np.repeat(frame[..., None], 3, axis=2)
-    elif frame.ndim == 3 and frame.shape[2] == 4:
-        frame = frame[..., :3]
-    if frame.ndim != 3 or frame.shape[2] != 3:
-        raise ValueError(
-            f"{name} must have shape (H, W, 3) (RGB), (H, W) (grayscale) or (H, W, 4) (RGBA); "
-            f"got {frame.shape}"
-        )
+    frame = as_rgb_array(frame, name=name)
     if frame.shape[0] < 8 or frame.shape[1] < 8:
         raise ValueError(f"{name} is too small to segment: {frame.shape[1]}x{frame.shape[0]} pixels")
-    return np.ascontiguousarray(frame)
+    return frame
 
 
 def _iter_video_file(path: Path) -> Iterator[np.ndarray]:

@@ -256,19 +256,37 @@ class NamedObject:
     marks: tuple[str, ...] = ()
 
 
-_LINE = re.compile(r"^\s*(?:[-*\u2022]|\d{1,3}[.)])\s+(.+?)\s*$")
-_ARTICLE = re.compile(r"^(?:the|a|an)\s+", re.I)
+# "- name: description", "* name - description", "1. name: description", "- [1][3] name: ..."
+_LINE = re.compile(
+    r"""^\s*(?:[-*\u2022\u2013]|\d{1,3}[.)])\s+      # bullet or number
+        (?P<head>[^:\n]{1,120}?)\s*                  # marks and name
+        (?::|\s[-\u2013\u2014]\s)\s*                  # ':' or ' - ' separator
+        (?P<desc>.*?)\s*$""",
+    re.VERBOSE,
+)
+_ARTICLE = re.compile(r"^(?:the|a|an|one|two|three|some|this|that|these|those)\s+", re.I)
+_NONE_NAMES = {"none", "nothing", "no object", "no objects", "n/a", "na", "null"}
+_MAX_NAME_WORDS = 6
 
 
 def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedObject]:
     """Read the list format of the ``moved_rigid_bodies`` prompts: one object per line,
-    ``- <name>: <description>`` (also ``*``, ``•`` or ``1.`` bullets, ``**bold**``
-    names and leading marks ``- [1][2] red mug: ...``). The line ``- none: ...`` and
-    lines without a colon are skipped; names are de-duplicated (first kept).
+    ``- <name>: <description>`` (also ``*``, ``\u2022`` or ``1.`` bullets, `` - `` instead
+    of the colon, ``**bold**`` names and leading marks ``- [1][2] red mug: ...``). This
+    is the toolkit's one parser for that answer (the VLM -> YOLOE path of
+    ``vlm_adapters`` uses it too).
+
+    Names are lower-cased and stripped of marks, markdown and a leading article; lines
+    naming nothing (``- none: ...``), names of more than six words and repeated names
+    are skipped; lines out of the format are ignored.
 
     Returns:
         One :class:`NamedObject` per object line, in order; names suit YOLOE
         ``set_classes``.
+
+    Example:
+        >>> [o.name for o in parse_named_objects("- **The Red Mug**: slid left\\n* lid - rotated")]
+        ['red mug', 'lid']
     """
     if not isinstance(answer, str):
         raise TypeError(f"answer must be a str, got {type(answer).__name__}")
@@ -276,14 +294,14 @@ def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedO
     seen: set[str] = set()
     for line in answer.splitlines():
         m = _LINE.match(line)
-        if not m or ":" not in m.group(1):
+        if not m:
             continue
-        head, desc = m.group(1).split(":", 1)
+        head = m.group("head")
         marks = tuple(t for t, _, _ in find_citations(head, style))
-        name = re.sub(r"\[[^\]]*\]|\([^)]*\)|[*_`\"]", " ", head)
-        name = _ARTICLE.sub("", " ".join(name.split())).strip(" .,-").lower()
-        if not name or name == "none" or name in seen:
+        name = re.sub(r"\[[^\]]*\]|\([^)]*\)|[*_`\"'\[\]()]", " ", head)
+        name = _ARTICLE.sub("", " ".join(name.split()).strip(" .,;:-").lower())
+        if not name or name in _NONE_NAMES or len(name.split()) > _MAX_NAME_WORDS or name in seen:
             continue
         seen.add(name)
-        out.append(NamedObject(name, desc.strip().strip("*").strip(), marks))
+        out.append(NamedObject(name, m.group("desc").strip("*").strip(), marks))
     return out

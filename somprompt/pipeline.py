@@ -9,6 +9,8 @@ from typing import Any, Mapping, Protocol, Sequence, runtime_checkable
 import numpy as np
 from PIL import Image
 
+from motionbits.objects import Instance, instances_from_labels
+
 from .answers import ParsedAnswer, parse_answer
 from .inputs import ImageLike, as_rgb_array, check_label_map
 from .metadata import MarkInfo
@@ -24,7 +26,8 @@ __all__ = ["Segmenter", "VLM", "GroundedVQAResult", "GroundedVQA"]
 class Segmenter(Protocol):
     """Anything callable as ``segmenter(frames) -> label maps``: T (H, W, 3) uint8 RGB
     frames in, T (H, W) integer label maps out (0 = background, k > 0 = object k,
-    the same k for the same object on every frame)."""
+    the same k for the same object on every frame). ``motionbits.MotionBitsSegmenter()``
+    is one."""
 
     def __call__(self, frames: list[np.ndarray]) -> Sequence[np.ndarray]: ...
 
@@ -32,7 +35,7 @@ class Segmenter(Protocol):
 @runtime_checkable
 class VLM(Protocol):
     """Anything with ``generate(frames, prompt, system=None, **gen) -> str`` (the
-    ``vlm_adapters`` interface; :class:`somprompt.testing.ScriptedVLM` for tests)."""
+    ``vlm_adapters`` interface; its ``StubVLM`` answers from a script, for tests)."""
 
     def generate(
         self,
@@ -83,6 +86,13 @@ class GroundedVQAResult:
         """Cited object id -> (H, W) bool mask on the last frame."""
         return self.parsed.masks
 
+    @property
+    def instances(self) -> list[Instance]:
+        """The cited objects on the last frame as :class:`motionbits.Instance` (with masks),
+        in order of first mention; ``motionbits.to_supervision`` takes them."""
+        by_id = {obj.id: obj for obj in instances_from_labels(self.label_maps[-1])}
+        return [by_id[i] for i in self.cited_ids if i in by_id]
+
 
 class GroundedVQA:
     """Ask a VLM about a video with Set-of-Mark prompts and get masks back.
@@ -92,7 +102,8 @@ class GroundedVQA:
     ``vlm.generate`` -> answer -> cited marks -> masks on the last frame.
 
     Args:
-        segmenter: callable ``frames -> label maps`` (:class:`Segmenter`).
+        segmenter: callable ``frames -> label maps`` (:class:`Segmenter`), e.g.
+            ``motionbits.MotionBitsSegmenter()``.
         vlm: object with ``generate(frames, prompt, system=None, **gen) -> str``.
         prompt: template name (default ``"som_vqa"``, which needs ``question``).
         system_prompt: template name of the system prompt, or None for none.
@@ -100,15 +111,19 @@ class GroundedVQA:
         style: ``"number"`` or ``"letter"`` marks.
         max_side: longest side of the frames sent to the VLM (None: full size).
         num_frames: frames sent (uniform sampling incl. first and last; None: all).
-        prompts_dir: folder of templates (default ``<repo>/prompts``).
+        prompts_dir: folder of templates (default: the templates installed with
+            ``somprompt``, see :func:`default_prompts_dir`).
         generation: keyword arguments passed to ``vlm.generate`` on every call.
 
     Example:
         >>> import numpy as np
-        >>> from somprompt.testing import FixedSegmenter, ScriptedVLM
+        >>> from somprompt.testing import FixedSegmenter
+        >>> class SaysBox:  # any object with generate(frames, prompt, system=None, **gen) -> str
+        ...     def generate(self, frames, prompt, system=None, **gen):
+        ...         return "The box [1] moved."
         >>> frames = [np.zeros((48, 64, 3), np.uint8)] * 3
         >>> labels = np.zeros((48, 64), np.int32); labels[10:30, 10:30] = 4
-        >>> vqa = GroundedVQA(FixedSegmenter([labels] * 3), ScriptedVLM("The box [1] moved."))
+        >>> vqa = GroundedVQA(FixedSegmenter([labels] * 3), SaysBox())
         >>> result = vqa(frames, question="What moved?")
         >>> result.cited_ids, int(result.masks[4].sum())
         ([4], 400)
@@ -191,8 +206,9 @@ class GroundedVQA:
         """Run the pipeline on one video.
 
         Args:
-            frames: T frames ((H, W, 3) uint8 RGB arrays or PIL images) or a (T, H, W, 3)
-                array.
+            frames: a video file or a folder of images (read with
+                :func:`motionbits.video.iter_frames`), T frames ((H, W, 3) uint8 RGB arrays
+                or PIL images) or a (T, H, W, 3) array.
             question: fills the template's ``question`` variable (``som_vqa``).
             label_maps: T label maps to use instead of calling the segmenter.
             **prompt_vars: other template variables (e.g. ``task`` for
@@ -210,12 +226,16 @@ class GroundedVQA:
                 f"prompt template {self.prompt_name!r} takes no question (it uses: "
                 f"{', '.join(self._prompt_vars) or 'no variables'})"
             )
+        if isinstance(frames, (str, os.PathLike)):
+            from motionbits.video import iter_frames  # the video reader, not the segmenter
+
+            frames = list(iter_frames(frames))
         if isinstance(frames, np.ndarray) and frames.ndim == 4:
             frames = list(frames)
-        if isinstance(frames, (np.ndarray, Image.Image, str, bytes)) or not hasattr(frames, "__iter__"):
+        if isinstance(frames, (np.ndarray, Image.Image, bytes)) or not hasattr(frames, "__iter__"):
             raise TypeError(
-                "frames must be a list of (H, W, 3) uint8 RGB frames or a (T, H, W, 3) array; "
-                "read a video file with motionbits.video.iter_frames"
+                "frames must be a video file, a folder of images, a list of (H, W, 3) uint8 RGB "
+                "frames or a (T, H, W, 3) array"
             )
         imgs = [as_rgb_array(f, name=f"frame {i}") for i, f in enumerate(frames)]
         if not imgs:

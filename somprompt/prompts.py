@@ -1,14 +1,15 @@
-"""Prompt templates from the repository's ``prompts/`` folder.
+"""Prompt templates: the repository's ``prompts/`` folder, installed as package data.
 
 Templates are plain ``.txt`` files using :class:`string.Template` syntax (``${name}``,
-``$$`` for a literal dollar). The folder is found next to this package
-(``<repo>/prompts``, which works from a source checkout and from an editable install);
-every function takes a ``prompts_dir`` to use another folder.
+``$$`` for a literal dollar). The repository's top-level ``prompts/`` folder is their
+source; ``somprompt/_prompts`` links to it and wheels carry it as package data, read with
+:mod:`importlib.resources`. Every function takes a ``prompts_dir`` to use another folder.
 """
 
 from __future__ import annotations
 
 import os
+from importlib import resources
 from pathlib import Path
 from string import Template
 from typing import Iterable
@@ -31,17 +32,17 @@ class PromptError(ValueError):
 
 
 def default_prompts_dir() -> Path:
-    """``<repo>/prompts``: the folder beside the ``somprompt`` package."""
-    return Path(__file__).resolve().parent.parent / "prompts"
+    """The templates installed with ``somprompt`` (package data ``somprompt/_prompts``; in
+    a source checkout, a link to ``<repo>/prompts``)."""
+    return Path(str(resources.files(__package__).joinpath("_prompts")))
 
 
 def _dir(prompts_dir: "str | os.PathLike | None") -> Path:
     d = Path(prompts_dir) if prompts_dir is not None else default_prompts_dir()
     if not d.is_dir():
         raise PromptError(
-            f"prompt folder {d} does not exist; somprompt looks for <repo>/prompts beside the "
-            "package (install from a source checkout with `pip install -e .`), or pass "
-            "prompts_dir=<folder of .txt templates>"
+            f"prompt folder {d} does not exist; pass prompts_dir=<folder of .txt templates> "
+            "(the default is the templates installed with somprompt)"
         )
     return d
 

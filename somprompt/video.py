@@ -12,6 +12,8 @@ import cv2
 import numpy as np
 from PIL import Image
 
+from motionbits.frames import sample_frame_indices
+
 from .anchors import LabelPlacement
 from .inputs import ImageLike, as_rgb_array, check_label_map, like_input
 from .metadata import MarkInfo, describe_marks, marks_to_json
@@ -28,27 +30,6 @@ __all__ = [
     "write_mp4",
     "write_gif",
 ]
-
-
-def sample_frame_indices(num_total: int, num_frames: int | None) -> list[int]:
-    """Indices of ``num_frames`` frames spread uniformly over ``num_total``, always
-    including the first and the last frame (the paper scores the last one).
-
-    ``None`` or ``num_frames >= num_total`` keeps every frame.
-
-    Example:
-        >>> sample_frame_indices(10, 4)
-        [0, 3, 6, 9]
-    """
-    if num_total < 1:
-        raise ValueError(f"there are no frames to sample from (num_total = {num_total})")
-    if num_frames is None or num_frames >= num_total:
-        return list(range(num_total))
-    if num_frames < 1:
-        raise ValueError(f"num_frames must be >= 1 or None, got {num_frames}")
-    if num_frames == 1:
-        return [num_total - 1]
-    return sorted({int(round(v)) for v in np.linspace(0, num_total - 1, num_frames)})
 
 
 def _target_size(h: int, w: int, max_side: int | None) -> tuple[int, int]:
@@ -231,27 +212,14 @@ def _as_arrays(frames: Sequence[ImageLike]) -> list[np.ndarray]:
 
 
 def write_mp4(frames: Sequence[ImageLike], path: "str | os.PathLike", fps: float = 10.0) -> Path:
-    """Write RGB frames to an mp4 file (OpenCV, ``'mp4v'`` codec).
+    """Write RGB frames to an H.264 mp4 that browsers play (see :func:`motionbits.video_writer.write_h264`).
 
     Raises:
-        ValueError: no frames, frames of different sizes, or OpenCV cannot open a
-            writer for ``path``.
+        ValueError: no frames, frames of different sizes, or ``fps`` <= 0.
     """
-    arrs = _as_arrays(frames)
-    if not fps > 0:
-        raise ValueError(f"fps must be > 0, got {fps}")
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    h, w = arrs[0].shape[:2]
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps), (w, h))
-    if not writer.isOpened():
-        raise ValueError(f"OpenCV could not open an mp4 writer for {path} (codec 'mp4v')")
-    try:
-        for a in arrs:
-            writer.write(cv2.cvtColor(a, cv2.COLOR_RGB2BGR))
-    finally:
-        writer.release()
-    return path
+    from motionbits.video_writer import write_h264
+
+    return write_h264(_as_arrays(frames), path, fps)
 
 
 def write_gif(frames: Sequence[ImageLike], path: "str | os.PathLike", fps: float = 10.0) -> Path:

@@ -3,7 +3,6 @@
 import argparse
 import importlib
 import json
-from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -74,14 +73,16 @@ def test_registry_plugins_and_errors():
         register_method("flow-cc", lambda **kw: None)
 
 
-def test_motionbits_method_takes_last_labels(monkeypatch):
-    def fake_segment_video(frames, config):
-        for i in range(1, len(frames)):
-            yield SimpleNamespace(labels=np.full(frames[i].shape[:2], i, np.int32))
+def test_motionbits_method_takes_last_labels():
+    from motionbits.synth import demo_clip
 
-    monkeypatch.setattr(motionbits, "segment_video", fake_segment_video, raising=False)
-    out = make_method("motionbits")([np.zeros((8, 8, 3), np.uint8)] * 4)
-    assert out.dtype == np.int32 and (out == 3).all()
+    clip = demo_clip(n_frames=4, size=(120, 160))
+    config = motionbits.MotionBitsConfig(n_nodes=900, max_side=240)
+    out = make_method("motionbits", config=config)(clip.frames)
+    expected = motionbits.MotionBitsSegmenter(config)(clip.frames)[-1]
+    assert out.dtype == np.int32 and out.any() and np.array_equal(out, expected)
+    exact = make_method("motionbits", config={"n_nodes": 900, "max_side": 240}, exact=True)
+    assert exact.config == config.with_(exact=True)
 
 
 def _run(module, argv):
@@ -119,6 +120,8 @@ def test_benchmark_runner_and_command(tmp_path, capsys):
                              save_pred=tmp_path / "pred", progress=False)
     assert set(res) == {"oracle", "flow-cc"}  # the method that cannot run is skipped
     assert res["oracle"]["macro"]["F1"] == 1.0 and res["oracle"]["macro"]["BF1"] == 1.0
+    assert res["oracle"]["false_positives"] == {"static_fp": 0.0, "static_fp_scene": 0.0,
+                                                "spurious": 0.0}
     assert 0.0 < res["flow-cc"]["macro"]["F1"] <= 1.0
     assert spf["flow-cc"] > 0
     assert (tmp_path / "pred" / "flow-cc" / "toy" / "s1.png").is_file()
@@ -128,7 +131,7 @@ def test_benchmark_runner_and_command(tmp_path, capsys):
                 ["benchmark", "--data", str(tmp_path / "data"), "--methods", "flow-cc",
                  "--json", str(out), "--quiet"]) == 0
     text = capsys.readouterr().out
-    assert "flow-cc" in text and "s/frame" in text
+    assert "flow-cc" in text and "s/frame" in text and "sFP" in text
     assert json.loads(out.read_text())["methods"]["flow-cc"]["macro"]["F1"] == pytest.approx(
         res["flow-cc"]["macro"]["F1"])
     # Saved predictions are readable by 'motionbits eval'.

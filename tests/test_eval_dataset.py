@@ -87,6 +87,8 @@ def test_evaluate_dataset_per_track_and_average(dataset):
     assert res["tracks"]["hand"]["pooled"]["P"] == pytest.approx(1.0)  # FP is ignored
     assert res["macro"]["F1"] == pytest.approx(0.75)  # mean over tracks
     assert res["per_scene"]["robot/a"]["n_gt"] == 2
+    # hand/b's labels/00000.png (all ones) is not the one scored: no false positive.
+    assert res["tracks"]["hand"]["false_positives"]["spurious"] == 0.0
 
 
 def test_eval_command_prints_table_and_json(dataset, tmp_path, capsys):
@@ -101,7 +103,14 @@ def test_eval_command_prints_table_and_json(dataset, tmp_path, capsys):
     data = json.loads(out.read_text())
     assert set(data) >= {"macro", "pooled", "per_scene"}
     assert set(data["macro"]) >= {"P", "R", "F1", "mIoU", "BP", "BR", "BF1"}
-    assert all(0.0 <= v <= 1.0 for v in data["macro"].values())
+    assert data["macro"] == pytest.approx(evaluate_dataset(gt_root, pred_root, progress=False)["macro"])
+    assert data["macro"]["F1"] == pytest.approx(0.75)
+    # hand/b: the false positive lies in the ignored corner; robot/a: none. No spurious.
+    assert "sFP" in text and "Spur" in text
+    fp = data["false_positives"]
+    assert fp["static_fp"] == 0.0 and fp["spurious"] == 0.0
+    assert data["tracks"]["hand"]["false_positives"]["static_fp_scene"] == 0.0
+    assert data["per_scene"]["robot/a"]["false_positives"]["static_pixels"] == 40 * 48 - 200
 
 
 def test_errors(dataset, tmp_path):

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from motionbits.eval import (
-    boundary_map, boundary_tolerance, contingency, evaluate_frame, hungarian_match, summarize,
+    boundary_counts, boundary_map, boundary_tolerance, contingency, evaluate_frame,
+    hungarian_match, summarize,
 )
 
 
@@ -20,17 +21,33 @@ def test_tolerance_matches_protocol():
     assert boundary_tolerance((1080, 1920)) == 7  # 0.003 * 2202.9 = 6.6
 
 
-def test_boundary_is_inner_contour_and_ignores_image_border():
-    lab = square((8, 8), 2, 2, 4)
+def test_boundary_is_seg2bmap_half_pixel_towards_origin():
+    lab = square((8, 8), 2, 2, 4)  # rows and columns 2..5
     b = boundary_map(lab)
-    assert b.sum() == 12  # perimeter of a 4x4 square
-    assert not b[3:5, 3:5].any()
+    expect = np.zeros((8, 8), bool)
+    expect[1:6, 1] = expect[1:6, 5] = expect[1, 1:6] = expect[5, 1:6] = True
+    np.testing.assert_array_equal(b, expect)  # background pixel on the left/top side
     full = np.ones((5, 5), np.int32)
     assert not boundary_map(full).any()  # the image border is not a boundary
+    corner = square((6, 6), 3, 3, 3)  # touches the bottom and right border
+    bc = boundary_map(corner)
+    assert bc[2, 2:].all() and bc[2:, 2].all() and bc.sum() == 7
     two = np.zeros((4, 6), np.int32)
-    two[:, :3], two[:, 3:] = 1, 2  # touching objects: both sides of the seam
+    two[:, :3], two[:, 3:] = 1, 2  # touching objects: one column of contour at the seam
     b2 = boundary_map(two)
-    assert b2[:, 2].all() and b2[:, 3].all() and b2.sum() == 8
+    assert b2[:, 2].all() and b2.sum() == 4
+    # Per object, the seam pixel belongs to both boundaries.
+    np.testing.assert_array_equal(boundary_counts(two, 2), [4, 4])
+
+
+def test_boundary_counts_equal_per_object_maps():
+    rng = np.random.default_rng(3)
+    lab = _blobs(rng, (30, 40), 6)
+    lab[0:4, 30:40] = 6  # an object on the image border
+    valid = rng.random(lab.shape) > 0.1
+    for v in (None, valid):
+        want = [boundary_map(lab == k, v).sum() for k in range(1, 7)]
+        np.testing.assert_array_equal(boundary_counts(lab, 6, v), want)
 
 
 def test_perfect_prediction_with_arbitrary_labels():
@@ -102,8 +119,9 @@ def test_shift_inside_and_outside_tolerance():
     np.testing.assert_allclose([s.f1[0], s.iou[0]], [0.9, 90 / 110])
     outside = square((40, 40), 10, 13, 10)  # 3 px right
     s = evaluate_frame(outside, gt)
-    # Of the 36 contour pixels of the shifted square, 4 on its left side (rows 10, 11, 18, 19)
-    # and 7 on each of top and bottom (cols 14..20) lie within 1 px of the GT contour: 18/36.
+    # seg2bmap contours are 11x11 outlines (40 px): GT rows/cols 9..19, prediction rows 9..19,
+    # cols 12..22. Within 1 px of the GT contour: 9 px of the top row (cols 12..20), 9 of the
+    # bottom row and 2 of the left side (rows 10 and 18): 20/40, and symmetrically for recall.
     np.testing.assert_allclose([s.bprecision[0], s.brecall[0], s.bf1[0]], 0.5)
     np.testing.assert_allclose([s.precision[0], s.recall[0], s.iou[0]], [0.7, 0.7, 70 / 130])
     s2 = evaluate_frame(outside, gt, tolerance=3)
@@ -192,9 +210,12 @@ def test_label_values_do_not_matter_and_self_match_is_perfect(seed):
     perm = rng.permutation(1000)[: pred.max() + 1] + 1
     perm[0] = 0
     a, b = evaluate_frame(pred, gt), evaluate_frame(perm[pred], gt)
-    for name in ("iou", "precision", "recall", "f1", "bprecision", "brecall", "bf1"):
-        np.testing.assert_allclose(getattr(a, name), getattr(b, name))
-    assert a.pooled == pytest.approx(b.pooled)
+    huge = evaluate_frame(np.where(pred > 0, pred + (1 << 21), 0), gt)  # beyond lookup tables
+    for other in (b, huge):
+        for name in ("iou", "precision", "recall", "f1", "bprecision", "brecall", "bf1"):
+            np.testing.assert_allclose(getattr(a, name), getattr(other, name))
+        assert a.pooled == pytest.approx(other.pooled)
+        assert (a.static_fp_pixels, a.spurious) == (other.static_fp_pixels, other.spurious)
     s = evaluate_frame(gt, gt)
     assert s.f1.size == 0 or (s.f1.min() == 1.0 and s.bf1.min() == 1.0)
 

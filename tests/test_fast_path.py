@@ -20,7 +20,8 @@ def both_paths():
 
 def test_fast_path_agrees_with_exact_at_grid_and_pixel_level(both_paths):
     fast, exact = both_paths
-    for f, e in zip(fast[1:], exact[1:]):
+    # frame 0 has no flow and a MotionBit is shown once it has moved in two frames
+    for f, e in zip(fast[2:], exact[2:]):
         assert f.node_labels.any(), "the clip must have moving bodies for this to test anything"
         assert adjusted_rand_index(f.node_labels, e.node_labels) >= 0.99
         assert adjusted_rand_index(f.labels, e.labels) >= 0.99

@@ -5,7 +5,8 @@ import pytest
 from PIL import Image
 
 from somprompt import GroundedVQA, GroundedVQAResult, PromptError, SetOfMarkRenderer, load_prompt
-from somprompt.testing import FixedSegmenter, ScriptedVLM
+from somprompt.testing import FixedSegmenter
+from vlm_adapters import StubVLM as ScriptedVLM  # the one scripted VLM of the toolkit
 
 
 def clip(T=10, h=120, w=160):
@@ -41,7 +42,7 @@ def test_end_to_end_with_every_intermediate():
     assert call.frames is not result.marked_frames and len(call.frames) == 4
     assert all(f.shape == (60, 80, 3) for f in call.frames)
     assert call.prompt == result.prompt and call.system == result.system
-    assert call.gen == {"max_new_tokens": 64}
+    assert call.gen["max_new_tokens"] == 64
     assert "Which object was pushed?" in result.prompt and "[1], [2]" in result.prompt
     assert result.prompt == load_prompt("som_vqa", num_marks=2, mark_list="[1], [2]",
                                         question="Which object was pushed?", cite_example="[1]")
@@ -65,7 +66,7 @@ def test_real_computation_segmenter_and_pil_frames_and_templates_with_extra_vars
         f = np.zeros((64, 64, 3), np.uint8)
         f[10:30, 5 + 4 * t:25 + 4 * t] = 255
         frames.append(Image.fromarray(f))
-    vlm = ScriptedVLM(lambda frames, prompt, system: "[1]" if "tower" in prompt else "none")
+    vlm = ScriptedVLM(lambda frames, prompt: "[1]" if "tower" in prompt else "none")
     vqa = GroundedVQA(ThresholdSegmenter(), vlm, prompt="som_grasp_first", system_prompt=None,
                       num_frames=None, max_side=None)
     result = vqa(frames, task="build a tower")
@@ -103,8 +104,10 @@ def test_pipeline_errors_are_clear():
         vqa(frames, "q?", label_maps=[maps[0], maps[1][:50], maps[2]])
     with pytest.raises(TypeError, match="uint8"):
         vqa([f.astype(np.float32) for f in frames], "q?")
-    with pytest.raises(TypeError, match="list of"):
+    with pytest.raises(FileNotFoundError, match="video.mp4"):
         vqa("video.mp4", "q?")
+    with pytest.raises(TypeError, match="list of"):
+        vqa(b"video.mp4", "q?")
     with pytest.raises(ValueError, match="takes no question"):
         GroundedVQA(FixedSegmenter(maps), vlm, prompt="som_interacted")(frames, "q?")
     with pytest.raises(PromptError, match="needs variable.*task"):
@@ -130,7 +133,8 @@ def test_custom_renderer_is_used():
 
 
 def test_scripted_vlm_runs_out():
-    vlm = ScriptedVLM(["a"])
-    vlm.generate([], "p")
-    with pytest.raises(RuntimeError, match="1 scripted answers"):
-        vlm.generate([], "p")
+    frame = [np.zeros((8, 8, 3), np.uint8)]
+    vlm = ScriptedVLM(["a"], cycle=False)
+    vlm.generate(frame, "p")
+    with pytest.raises(IndexError, match="after 1 calls"):
+        vlm.generate(frame, "p")

@@ -1,5 +1,7 @@
 """Prompt templates: all render, strict variables, clear errors, override folder."""
 
+from pathlib import Path
+
 import pytest
 
 from somprompt import (
@@ -21,9 +23,12 @@ SAMPLE = {
 }
 
 
-def test_prompts_dir_is_the_repository_folder():
+def test_prompts_dir_is_the_package_data_and_the_repository_folder():
     d = default_prompts_dir()
-    assert d.is_dir() and d.name == "prompts" and (d.parent / "somprompt").is_dir()
+    assert d.is_dir() and d.name == "_prompts" and d.parent.name == "somprompt"
+    repo = Path(__file__).resolve().parent.parent / "prompts"
+    if repo.is_dir():  # source checkout: the package data is the repository's folder
+        assert d.resolve() == repo.resolve()
 
 
 def test_expected_templates_exist():

@@ -223,6 +223,14 @@ def test_empty_label_map_draws_nothing(scene):
     assert np.array_equal(out, scene)
 
 
+def test_greyscale_and_rgba_frames_are_read_as_everywhere_else(scene, labels):
+    """One frame policy for the three packages (motionbits.as_rgb_array)."""
+    grey = scene[..., 1]
+    assert np.array_equal(draw_marks(grey, labels), draw_marks(np.repeat(grey[..., None], 3, 2), labels))
+    rgba = np.concatenate([scene, np.full(scene.shape[:2] + (1,), 7, np.uint8)], axis=2)
+    assert np.array_equal(draw_marks(rgba, labels), draw_marks(scene, labels))
+
+
 def test_uint16_and_bool_label_maps_are_accepted(scene, labels):
     a = draw_marks(scene, labels.astype(np.uint16))
     b = draw_marks(scene, labels)
@@ -234,8 +242,7 @@ def test_uint16_and_bool_label_maps_are_accepted(scene, labels):
     "frame, lm, exc, words",
     [
         (np.zeros((20, 20, 3), np.float32), np.zeros((20, 20), int), TypeError, "uint8"),
-        (np.zeros((20, 20), np.uint8), np.zeros((20, 20), int), ValueError, "grayscale"),
-        (np.zeros((20, 20, 4), np.uint8), np.zeros((20, 20), int), ValueError, "RGBA"),
+        (np.zeros((20, 20, 2), np.uint8), np.zeros((20, 20), int), ValueError, "RGBA"),
         ("frame.png", np.zeros((20, 20), int), TypeError, "PIL"),
         (np.zeros((20, 20, 3), np.uint8), np.zeros((20, 20), np.float32), TypeError, "integer"),
         (np.zeros((20, 20, 3), np.uint8), np.zeros((20, 20, 2), int), ValueError, "label map"),

@@ -123,18 +123,3 @@ def test_generator_is_deterministic_and_rigid_bodies_are_single_labels():
     for i, name in enumerate(names):
         if name.startswith("fix"):
             assert model.body_weldid[i] != i
-
-
-def test_missing_mujoco_message(monkeypatch):
-    import builtins
-
-    real_import = builtins.__import__
-
-    def fake_import(name, *args, **kwargs):
-        if name == "mujoco":
-            raise ImportError("No module named 'mujoco'")
-        return real_import(name, *args, **kwargs)
-
-    monkeypatch.setattr(builtins, "__import__", fake_import)
-    with pytest.raises(ImportError, match=r"pip install motionbits\[sim\]"):
-        mjb.import_mujoco()

@@ -18,7 +18,6 @@ from vlm_adapters import (
     extract_noun_phrases,
     make_vlm_yoloe_method,
     masks_to_label_map,
-    parse_object_list,
     phrases_from_answer,
 )
 from vlm_adapters.base import MissingDependencyError, check_local_path, require, sample_frames, to_rgb_frames
@@ -27,8 +26,8 @@ from vlm_adapters.base import MissingDependencyError, check_local_path, require,
 def test_import_is_cheap_and_lazy():
     code = (
         "import sys, vlm_adapters as v\n"
-        "heavy = [m for m in ('torch', 'transformers', 'ultralytics', 'PIL', 'motionbits', 'somprompt') "
-        "if m in sys.modules]\n"
+        "heavy = [m for m in ('torch', 'transformers', 'ultralytics', 'PIL', 'somprompt', "
+        "'motionbits.segmenter', 'cv2') if m in sys.modules]\n"
         "assert not heavy, heavy\n"
         "for n in v.__all__: getattr(v, n)\n"  # every public name resolves...
         "heavy = [m for m in ('torch', 'transformers', 'ultralytics') if m in sys.modules]\n"
@@ -50,9 +49,12 @@ def test_frames_normalisation():
 
     rgb = np.zeros((4, 5, 3), np.uint8)
     rgb[..., 0] = 200
-    out = to_rgb_frames([rgb, Image.fromarray(rgb).convert("RGBA"), rgb.astype(np.float32) / 255.0])
+    out = to_rgb_frames([rgb, Image.fromarray(rgb).convert("RGBA"), rgb[..., 0], np.dstack([rgb, rgb[..., :1]])])
     assert all(f.shape == (4, 5, 3) and f.dtype == np.uint8 for f in out)
     assert all(int(f[0, 0, 0]) == 200 for f in out)
+    # one frame policy everywhere (motionbits.as_rgb_array): floats are refused, not guessed at
+    with pytest.raises(TypeError, match="uint8"):
+        to_rgb_frames([rgb.astype(np.float32) / 255.0])
     assert len(to_rgb_frames(np.zeros((3, 4, 5, 3), np.uint8))) == 3
     with pytest.raises(ValueError, match="empty"):
         to_rgb_frames([])
@@ -65,6 +67,12 @@ def test_sample_frames_keeps_the_last():
     picked = sample_frames(frames, 5)
     assert len(picked) == 5 and picked[0] == 0 and picked[-1] == 19
     assert sample_frames(frames, None) == frames and sample_frames(frames, 50) == frames
+    # the docstring's promise holds for one frame too, as in somprompt
+    from somprompt import sample_frame_indices
+
+    assert sample_frames(range(10), 1) == [9] == sample_frame_indices(10, 1)
+    for n in range(1, 12):
+        assert sample_frames(list(range(10)), n) == sample_frame_indices(10, n)
 
 
 def test_missing_extra_message(monkeypatch):
@@ -108,12 +116,17 @@ def test_stub_vlm_scripts_and_records():
 # --------------------------------------------------------------------------- phrases
 
 
-def test_prompt_contains_paper_question_and_format():
+def test_prompt_is_the_one_template():
+    from somprompt import load_prompt
+
     assert MOVED_OBJECTS_PROMPT.startswith(PAPER_QUESTION)
-    assert "- <short noun phrase>: <description>" in MOVED_OBJECTS_PROMPT
+    assert MOVED_OBJECTS_PROMPT == load_prompt("moved_rigid_bodies")
+    assert "- <name>: <description>" in MOVED_OBJECTS_PROMPT
 
 
-def test_parse_object_list_formats():
+def test_one_parser_formats():
+    from somprompt import parse_named_objects
+
     answer = (
         "Here is what moved:\n"
         "- Red block: a small cube pushed by the gripper\n"
@@ -122,10 +135,14 @@ def test_parse_object_list_formats():
         "- red block: duplicate line\n"
         "Some closing remark without the format."
     )
-    mentions = parse_object_list(answer)
+    mentions = parse_named_objects(answer)
     assert [m.name for m in mentions] == ["red block", "laptop lid", "drawer"]
     assert mentions[0].description == "a small cube pushed by the gripper"
-    assert parse_object_list("no list here") == []
+    assert parse_named_objects("no list here") == []
+    # the VLM -> YOLOE path reads the same names as the set-of-mark parser
+    assert phrases_from_answer(answer) == ["red block", "laptop lid", "drawer"]
+    marked = "- [2] The Laptop lid: hinge\n- [1][3] **red block** - pushed"
+    assert phrases_from_answer(marked) == [o.name for o in parse_named_objects(marked)] == ["laptop lid", "red block"]
 
 
 def test_free_text_fallback_and_none():

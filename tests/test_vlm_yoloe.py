@@ -13,7 +13,7 @@ import pytest
 torch = pytest.importorskip("torch")
 pytest.importorskip("ultralytics")
 
-from vlm_adapters import StubVLM, YOLOEDetector, YOLOEGrounder, make_vlm_yoloe_method  # noqa: E402
+from vlm_adapters import StubVLM, YOLOEDetector, YOLOEGrounder, make_vlm_yoloe_method, masks_to_label_map  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,6 @@ def _image(h=120, w=160):
 def _check_label_map(labels, shape):
     assert labels.shape == shape and labels.dtype == np.int32
     ids = np.unique(labels)
-    assert ids.min() >= 0
     k = int(ids.max())
     assert set(ids[ids > 0]) == set(range(1, k + 1))  # 1..K, no gaps
 
@@ -51,6 +50,9 @@ def test_precomputed_embeddings_end_to_end(detector):
         detector.model.model.names.values()) == ["red block", "drawer"]
     labels = grounder.ground("- red block: cube\n- drawer: slides open", _image())
     _check_label_map(labels, (120, 160))
+    # label k is painted from the detections, highest score first
+    det = detector.detect(_image(), ["red block", "drawer"])
+    assert np.array_equal(labels, masks_to_label_map(det.masks, det.scores, max_instances=5))
     assert labels.max() == len(np.unique(labels)) - 1 <= 5
 
 
@@ -89,4 +91,6 @@ def test_benchmark_method_with_yoloe(detector):
     video = np.stack([_image() for _ in range(6)])
     labels = method(video)
     _check_label_map(labels, (120, 160))
+    # the method's label map is the grounder's on the final frame
+    assert np.array_equal(labels, grounder.ground("- wooden cube: pushed to the left", video[-1]))
     assert method.last_phrases == ["wooden cube"]

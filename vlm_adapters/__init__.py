@@ -44,10 +44,7 @@ _EXPORTS: dict[str, str] = {
     "StubVLM": "stub",
     # text -> phrases
     "PAPER_QUESTION": "phrases",
-    "OUTPUT_FORMAT": "phrases",
     "MOVED_OBJECTS_PROMPT": "phrases",
-    "ObjectMention": "phrases",
-    "parse_object_list": "phrases",
     "extract_noun_phrases": "phrases",
     "phrases_from_answer": "phrases",
     # phrases -> masks
@@ -99,11 +96,8 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only (names a
     from .plugin import load_vlm, vlm_yoloe_method
     from .phrases import (
         MOVED_OBJECTS_PROMPT,
-        OUTPUT_FORMAT,
         PAPER_QUESTION,
-        ObjectMention,
         extract_noun_phrases,
-        parse_object_list,
         phrases_from_answer,
     )
     from .qwen import Qwen2_5_VLAdapter

@@ -6,12 +6,14 @@ helpers (`resolve_device`, `resolve_dtype`) import it when called.
 from __future__ import annotations
 
 import abc
-import importlib
 import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Protocol, Union, runtime_checkable
 
 import numpy as np
+
+from motionbits.frames import as_rgb_array, sample_frame_indices
+from motionbits.objects import MissingDependencyError, require
 
 if TYPE_CHECKING:  # pragma: no cover
     from PIL import Image
@@ -26,7 +28,6 @@ __all__ = [
     "BaseVLM",
     "MissingDependencyError",
     "require",
-    "to_rgb_array",
     "to_rgb_frames",
     "to_pil_frames",
     "sample_frames",
@@ -39,54 +40,15 @@ __all__ = [
 DEFAULT_MAX_NEW_TOKENS = 256
 
 
-class MissingDependencyError(ImportError):
-    """An optional dependency of an adapter is not installed; the message names the extra."""
-
-
-def require(module: str, extra: str, purpose: str = "") -> Any:
-    """Import `module` or raise `MissingDependencyError` that says which extra to install.
-
-    Args:
-        module: dotted module name, e.g. ``"transformers"``.
-        extra: the ``motionbits`` extra that provides it, e.g. ``"vlm"`` or ``"yoloe"``.
-        purpose: what needs it, for the message (e.g. ``"Qwen2_5_VLAdapter"``).
-    """
-    try:
-        return importlib.import_module(module)
-    except ImportError as exc:
-        who = f"{purpose} needs" if purpose else "This needs"
-        raise MissingDependencyError(
-            f"{who} the optional dependency '{module.split('.')[0]}', which is not installed "
-            f"or failed to import ({exc}). Install it with: pip install \"motionbits[{extra}]\""
-        ) from exc
-
-
 # --------------------------------------------------------------------------- frames
-
-
-def to_rgb_array(frame: Frame) -> np.ndarray:
-    """One frame as an (H, W, 3) uint8 RGB array (PIL images are converted to RGB)."""
-    if hasattr(frame, "convert") and hasattr(frame, "size"):  # PIL.Image without importing PIL
-        frame = np.asarray(frame.convert("RGB"))
-    arr = np.asarray(frame)
-    if arr.ndim == 2:
-        arr = np.repeat(arr[:, :, None], 3, axis=2)
-    if arr.ndim != 3 or arr.shape[2] not in (3, 4):
-        raise ValueError(f"a frame must be (H, W, 3) RGB, got an array of shape {arr.shape}")
-    if arr.shape[2] == 4:
-        arr = arr[:, :, :3]
-    if arr.dtype != np.uint8:
-        if np.issubdtype(arr.dtype, np.floating) and arr.size and float(arr.max()) <= 1.0:
-            arr = arr * 255.0
-        arr = np.clip(arr, 0, 255).astype(np.uint8)
-    return np.ascontiguousarray(arr)
 
 
 def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
     """Frames as a list of (H, W, 3) uint8 RGB arrays.
 
-    Accepts a list of (H, W, 3) arrays or PIL images, or one (T, H, W, 3) array.
-    A single (H, W, 3) frame is treated as a one-frame video.
+    Accepts a list of frames (see :func:`motionbits.as_rgb_array`: uint8 RGB, greyscale or
+    RGBA arrays, PIL images), or one (T, H, W, 3) array. A single (H, W, 3) frame is
+    treated as a one-frame video.
     """
     if isinstance(frames, np.ndarray):
         if frames.ndim == 3:
@@ -95,7 +57,7 @@ def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
             raise ValueError(f"frames must be (T, H, W, 3) or a list of (H, W, 3); got shape {frames.shape}")
     elif hasattr(frames, "convert"):  # one PIL image
         frames = [frames]
-    out = [to_rgb_array(f) for f in frames]
+    out = [as_rgb_array(f, name=f"frame {i}") for i, f in enumerate(frames)]
     if not out:
         raise ValueError("frames is empty: pass at least one (H, W, 3) uint8 RGB frame")
     return out
@@ -109,18 +71,13 @@ def to_pil_frames(frames: Sequence[Frame] | np.ndarray) -> list[Image.Image]:
 
 
 def sample_frames(frames: Sequence[Frame], num_frames: int | None) -> list[Frame]:
-    """Up to `num_frames` frames spaced evenly over the clip; the last frame is always kept.
+    """Up to `num_frames` frames spaced evenly over the clip; the last frame is always kept
+    (see :func:`motionbits.sample_frame_indices`).
 
     `None` or a number >= len(frames) keeps every frame. The final frame is the one the
     benchmark scores, so it is always included.
     """
-    n = len(frames)
-    if num_frames is None or num_frames >= n:
-        return list(frames)
-    if num_frames < 1:
-        raise ValueError(f"num_frames must be >= 1, got {num_frames}")
-    idx = np.unique(np.round(np.linspace(0, n - 1, num_frames)).astype(int))
-    return [frames[i] for i in idx]
+    return [frames[i] for i in sample_frame_indices(len(frames), num_frames)]
 
 
 # --------------------------------------------------------------------------- paths and devices

@@ -24,7 +24,10 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from .base import Frame, MissingDependencyError, require, to_rgb_array
+from motionbits.frames import as_rgb_array
+from motionbits.objects import Instance, instance_from_mask
+
+from .base import Frame, MissingDependencyError, require
 from .phrases import phrases_from_answer
 
 __all__ = [
@@ -67,6 +70,14 @@ class Detections:
     @classmethod
     def empty(cls, height: int, width: int) -> Detections:
         return cls(np.zeros((0, height, width), bool), np.zeros((0,), np.float32), [])
+
+    def instances(self) -> list[Instance]:
+        """The detections as :class:`motionbits.Instance`: ids 1..K in this order, with
+        mask, score and phrase (``name``); ``motionbits.to_supervision`` takes them."""
+        return [
+            instance_from_mask(m, k + 1, score=float(s), name=self.phrases[k] if self.phrases else None)
+            for k, (m, s) in enumerate(zip(self.masks, self.scores))
+        ]
 
 
 @runtime_checkable
@@ -277,7 +288,7 @@ class YOLOEDetector:
 
     def detect(self, image: Frame, phrases: Sequence[str]) -> Detections:
         """Instances of `phrases` in `image` ((H, W, 3) uint8 RGB or PIL); masks at (H, W)."""
-        rgb = to_rgb_array(image)
+        rgb = as_rgb_array(image, name="image")
         h, w = rgb.shape[:2]
         phrases = list(dict.fromkeys(str(p) for p in phrases))
         if not phrases:
@@ -338,7 +349,7 @@ class TextGrounder:
 
     def detect(self, text: str, image: Frame) -> Detections:
         """Instances of the objects named in `text`, found in `image`."""
-        rgb = to_rgb_array(image)
+        rgb = as_rgb_array(image, name="image")
         phrases = self.phrases(text)
         if not phrases:
             return Detections.empty(*rgb.shape[:2])
@@ -356,7 +367,7 @@ class YOLOEGrounder(TextGrounder):
     """`TextGrounder` over YOLOE: the paper's VLM-text -> masks translation.
 
     Example:
-        >>> grounder = YOLOEGrounder.from_pretrained("weights/yoloe-11l-seg.pt",
+        >>> grounder = YOLOEGrounder.from_pretrained("weights/yoloe-11l-seg.pt",  # doctest: +SKIP
         ...                                          text_encoder="weights/mobileclip_blt.ts")
         >>> labels = grounder.ground("- red block: the cube that slid", final_frame)  # doctest: +SKIP
         >>> labels.shape, labels.dtype  # doctest: +SKIP

@@ -46,7 +46,7 @@ class InternVLAdapter(TransformersVLM):
     of each image (up to 12 tiles + a thumbnail per frame).
 
     Example:
-        >>> vlm = InternVLAdapter.from_pretrained("/models/InternVL3-8B-hf")
+        >>> vlm = InternVLAdapter.from_pretrained("/models/InternVL3-8B-hf")  # doctest: +SKIP
         >>> vlm.generate(frames, "What rigid bodies have moved in the video?")  # doctest: +SKIP
     """
 

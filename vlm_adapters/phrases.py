@@ -2,24 +2,23 @@
 
 The paper (section 6.1) asks every VLM "What rigid bodies or parts have moved in the video?
 Describe each in detail." together with an output-format specification, so that the answer
-can be handed to YOLOE. `MOVED_OBJECTS_PROMPT` is that prompt with our format
-specification: one object per line, ``- <short noun phrase>: <description>``.
+can be handed to YOLOE. `MOVED_OBJECTS_PROMPT` is the toolkit's one prompt for it (the
+``moved_rigid_bodies`` template of ``somprompt``): one object per line,
+``- <short noun phrase>: <description>``.
 
-`parse_object_list` reads that format; `extract_noun_phrases` is the fallback for free
-text (a heuristic without an NLP model); `phrases_from_answer` tries the first, then the
-second. Pure Python: no dependencies.
+`somprompt.parse_named_objects` reads that format (the one parser, shared with the
+set-of-mark prompts); `extract_noun_phrases` is the fallback for free text (a heuristic
+without an NLP model); `phrases_from_answer` tries the first, then the second.
 """
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+
+from somprompt import load_prompt, parse_named_objects
 
 __all__ = [
     "PAPER_QUESTION",
-    "OUTPUT_FORMAT",
     "MOVED_OBJECTS_PROMPT",
-    "ObjectMention",
-    "parse_object_list",
     "extract_noun_phrases",
     "phrases_from_answer",
 ]
@@ -27,69 +26,12 @@ __all__ = [
 #: The question of the paper's VLM baselines (section 6.1), verbatim.
 PAPER_QUESTION = "What rigid bodies or parts have moved in the video? Describe each in detail."
 
-#: The output-format specification that makes the answer machine-readable for YOLOE.
-OUTPUT_FORMAT = (
-    "Answer with one line per moved rigid body or part, and nothing else, in this format:\n"
-    "- <short noun phrase>: <description>\n"
-    "The short noun phrase names the object in 1-4 words a detector can find "
-    '(for example "red mug", "drawer", "laptop lid"); the description says how it looks and moves. '
-    "If nothing moved, answer: - none: nothing moved"
-)
+#: Paper question + format specification: the default prompt of the VLM -> YOLOE baseline
+#: (template ``moved_rigid_bodies``).
+MOVED_OBJECTS_PROMPT = load_prompt("moved_rigid_bodies")
 
-#: Paper question + format specification: the default prompt of the VLM -> YOLOE baseline.
-MOVED_OBJECTS_PROMPT = PAPER_QUESTION + "\n\n" + OUTPUT_FORMAT
-
-_NONE_NAMES = {"none", "nothing", "no object", "no objects", "n/a", "na", "null"}
-
-# "- name: description", "* name - description", "1. name: description", "**name**: description"
-_LINE = re.compile(
-    r"""^\s*(?:[-*\u2022\u2013]|\d+[.)])\s+   # bullet or number
-        (?P<name>[^:\n]{1,80}?)\s*            # short name
-        (?::|\s[-\u2013\u2014]\s)\s*          # ':' or ' - ' separator
-        (?P<desc>.*)$""",
-    re.VERBOSE,
-)
-_MARKUP = re.compile(r"[*_`\"'\[\]()]+")
-_ARTICLE = re.compile(r"^(?:the|a|an|one|two|three|some|this|that|these|those)\s+", re.IGNORECASE)
-
-
-@dataclass(frozen=True)
-class ObjectMention:
-    """One object named in a VLM answer: the detector prompt and the VLM's description."""
-
-    name: str
-    description: str = ""
-
-
-def _clean_name(name: str) -> str:
-    name = _MARKUP.sub(" ", name)
-    name = re.sub(r"\s+", " ", name).strip(" .,;:-").lower()
-    name = _ARTICLE.sub("", name)
-    return name
-
-
-def parse_object_list(text: str) -> list[ObjectMention]:
-    """Objects from an answer in the ``- <short noun phrase>: <description>`` format.
-
-    Lines not in the format are ignored; "- none: ..." lines are dropped; names are
-    lower-cased, stripped of markdown and leading articles, and de-duplicated in order.
-
-    Returns:
-        the mentions in answer order (empty when no line matches the format).
-    """
-    out: list[ObjectMention] = []
-    seen: set[str] = set()
-    for line in text.splitlines():
-        m = _LINE.match(line)
-        if not m:
-            continue
-        name = _clean_name(m.group("name"))
-        if not name or name in _NONE_NAMES or len(name.split()) > 6:
-            continue
-        if name not in seen:
-            seen.add(name)
-            out.append(ObjectMention(name, m.group("desc").strip()))
-    return out
+# "- none: nothing moved", "None.", "* nothing"
+_SAYS_NONE = re.compile(r"^\W*(?:none|nothing)\b", re.IGNORECASE | re.MULTILINE)
 
 
 # --------------------------------------------------------------------------- free text
@@ -164,12 +106,7 @@ def phrases_from_answer(text: str, max_phrases: int | None = 16) -> list[str]:
         short lower-case noun phrases, in answer order, no duplicates. An answer in the
         requested format that lists only "none" gives an empty list (nothing moved).
     """
-    mentions = parse_object_list(text)
-    if mentions:
-        names = [m.name for m in mentions]
-    elif any(_LINE.match(line) and _clean_name(_LINE.match(line).group("name")) in _NONE_NAMES
-             for line in text.splitlines()):
-        names = []
-    else:
+    names = [obj.name for obj in parse_named_objects(text)]
+    if not names and not _SAYS_NONE.search(text):
         names = extract_noun_phrases(text)
     return names if max_phrases is None else names[:max_phrases]

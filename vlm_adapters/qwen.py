@@ -15,7 +15,7 @@ class Qwen2_5_VLAdapter(TransformersVLM):
     """Qwen2.5-VL adapter.
 
     Example:
-        >>> vlm = Qwen2_5_VLAdapter.from_pretrained("/models/Qwen2.5-VL-7B-Instruct", fps=2.0)
+        >>> vlm = Qwen2_5_VLAdapter.from_pretrained("/models/Qwen2.5-VL-7B-Instruct", fps=2.0)  # doctest: +SKIP
         >>> vlm.generate(frames, "What rigid bodies have moved in the video?")  # doctest: +SKIP
 
     Pixel budget: pass ``processor_kwargs={"min_pixels": ..., "max_pixels": ...}`` to

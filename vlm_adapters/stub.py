@@ -1,4 +1,5 @@
-"""`StubVLM`: a scripted stand-in for a real VLM, for tests and demos without weights.
+"""`StubVLM`: the scripted stand-in for a real VLM, for tests and demos without weights
+(the one scripted VLM of the toolkit; ``somprompt``'s tests use it too).
 
 It does not look at the frames. It returns scripted answers, so pipelines around a VLM
 (set-of-mark prompting, the YOLOE reverse path, the benchmark) can run end to end
@@ -7,8 +8,10 @@ anywhere. Every call is recorded in `calls` for inspection.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import Union
+from dataclasses import dataclass, field
+from typing import Any, Union
+
+import numpy as np
 
 from .base import DEFAULT_MAX_NEW_TOKENS, BaseVLM, Frame, to_rgb_frames
 
@@ -19,12 +22,15 @@ Script = Union[str, Sequence[str], Callable[[list, str], str]]
 
 @dataclass(frozen=True)
 class StubCall:
-    """One recorded call: how many frames, their (H, W) size, the prompt and system text."""
+    """One recorded call: how many frames, their (H, W) size, the prompt and system text,
+    the frames themselves ((H, W, 3) uint8) and the generation options."""
 
     num_frames: int
     frame_size: tuple[int, int]
     prompt: str
     system: str | None
+    frames: list[np.ndarray] = field(default_factory=list, compare=False, repr=False)
+    gen: dict[str, Any] = field(default_factory=dict, compare=False)
 
 
 class StubVLM(BaseVLM):
@@ -38,9 +44,12 @@ class StubVLM(BaseVLM):
         name: short name for tables.
 
     Example:
+        >>> import numpy as np
         >>> vlm = StubVLM("- red block: the cube the gripper pushed")
-        >>> vlm.generate([frame0, frame1], "What moved?")  # doctest: +SKIP
+        >>> vlm.generate([np.zeros((4, 6, 3), np.uint8)] * 2, "What moved?")
         '- red block: the cube the gripper pushed'
+        >>> vlm.calls[0].num_frames, vlm.calls[0].frame_size
+        (2, (4, 6))
     """
 
     def __init__(self, responses: Script = "", *, cycle: bool = True, name: str = "stub") -> None:
@@ -71,7 +80,8 @@ class StubVLM(BaseVLM):
     ) -> str:
         arrays = to_rgb_frames(frames)
         i = len(self.calls)
-        self.calls.append(StubCall(len(arrays), arrays[-1].shape[:2], prompt, system))
+        gen = {"max_new_tokens": max_new_tokens, "do_sample": do_sample, "temperature": temperature, "seed": seed}
+        self.calls.append(StubCall(len(arrays), arrays[-1].shape[:2], prompt, system, arrays, gen))
         if self._fn is not None:
             return str(self._fn(arrays, prompt))
         if i >= len(self._answers) and not self.cycle:

@@ -22,7 +22,7 @@ class VideoLlama3Adapter(TransformersVLM):
     1 fps and warns).
 
     Example:
-        >>> vlm = VideoLlama3Adapter.from_pretrained("/models/VideoLLaMA3-7B-hf", fps=1.0)
+        >>> vlm = VideoLlama3Adapter.from_pretrained("/models/VideoLLaMA3-7B-hf", fps=1.0)  # doctest: +SKIP
         >>> vlm.generate(frames, "What rigid bodies have moved in the video?")  # doctest: +SKIP
     """
 

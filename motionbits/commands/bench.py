@@ -26,7 +26,7 @@ __all__ = ["register", "run", "ClipTiming", "time_clip", "parse_size"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "bench", help="time the segmenter (fast vs exact path, scaling) on a synthetic clip",
+        "bench", help="SPEED of the segmenter: ms per stage and frame on a generated clip (accuracy: see benchmark)",
         description="Median milliseconds per stage and per frame on a generated clip (the "
                     "first frame, which only primes the stream, is excluded); the exact path "
                     "on the same frames with the agreement of the two; scaling with the "

@@ -51,7 +51,7 @@ def parse_method_options(items: list[str] | None, methods: list[str],
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "benchmark",
-        help="run segmentation methods on MoRiBo-format data and score them",
+        help="ACCURACY of methods: run them on MoRiBo-format data and score them (speed: see bench)",
         description=(
             "Run each method on every scene (frames -> last-frame label map), score it with the\n"
             "MoRiBo protocol (see 'motionbits eval') and print Overlap / Boundary P R F1 (mIoU)\n"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -11,24 +12,31 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
+from motionbits import __version__
 from motionbits.config import MotionBitsConfig
-from motionbits.overlay import overlay_labels
+from motionbits.config_file import config_from_dict, load_config
 from motionbits.segmenter import STAGES, MotionBitsSegmenter
 from motionbits.video import count_frames, iter_frames
+from motionbits.video_writer import H264Writer
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "segment", help="segment the moving rigid bodies of a video",
         description="Write DIR/labels/NNNNN.png (16-bit label maps, 0 = background), "
-                    "DIR/overlay.mp4 and DIR/summary.json. Without INPUT, a built-in "
-                    "synthetic clip is generated and segmented (and scored against its "
-                    "exact ground truth).")
+                    "DIR/overlay.mp4 (H.264, with somprompt's numbered marks) and DIR/summary.json "
+                    "(the whole config, the backend and the version; `--config DIR/summary.json` "
+                    "repeats the run). Without INPUT, a built-in synthetic clip is generated and "
+                    "segmented (and scored against its exact ground truth).")
     p.add_argument("input", nargs="?", help="video file or folder of images (default: built-in demo clip)")
     p.add_argument("--out", default="motionbits_out", help="output folder (default: %(default)s)")
-    p.add_argument("--nodes", type=int, default=MotionBitsConfig.n_nodes, help="grid nodes n (default: %(default)s)")
-    p.add_argument("--max-side", type=int, default=MotionBitsConfig.max_side,
-                   help="working resolution, longest side in px (default: %(default)s)")
+    p.add_argument("--config", metavar="FILE",
+                   help="TOML or JSON file setting any MotionBitsConfig field (e.g. n_nodes = 2500), "
+                        "or the summary.json of an earlier run to repeat it; --nodes, --max-side and "
+                        "--backend override it")
+    p.add_argument("--nodes", type=int, help=f"grid nodes n (default: {MotionBitsConfig.n_nodes})")
+    p.add_argument("--max-side", type=int,
+                   help=f"working resolution, longest side in px (default: {MotionBitsConfig.max_side})")
     p.add_argument("--every", type=int, default=1, help="use every K-th frame (default: %(default)s)")
     p.add_argument("--start", type=int, default=0,
                    help="index of the first frame to use (default: %(default)s)")
@@ -36,8 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="stop after N used frames (default: all; the paper's windows are 11-16)")
     p.add_argument("--fps", type=float, default=10.0, help="frame rate of overlay.mp4 (default: %(default)s)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--backend", default=MotionBitsConfig.backend,
-                   help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] (default: %(default)s)")
+    p.add_argument("--backend",
+                   help="numpy, torch (CUDA if present), torch:cpu or torch:cuda[:N] "
+                        f"(default: {MotionBitsConfig.backend})")
     p.set_defaults(func=run)
 
 
@@ -62,7 +71,9 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--start must be >= 0, got {args.start}")
     if args.frames is not None and args.frames < 1:
         raise ValueError(f"--frames must be >= 1, got {args.frames}")
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=args.max_side, backend=args.backend)
+    flags = {k: v for k, v in (("n_nodes", args.nodes), ("max_side", args.max_side),
+                                ("backend", args.backend)) if v is not None}
+    config = load_config(args.config, **flags) if args.config else config_from_dict(flags, source="options")
     gt = None
     if args.input is None:
         from motionbits.synth import demo_clip
@@ -75,8 +86,13 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     (out / "labels").mkdir(parents=True, exist_ok=True)
 
+    from somprompt import MarkRegistry, SetOfMarkRenderer  # the command draws marks; the library does not
+
     seg = MotionBitsSegmenter(config)
-    writer = None
+    # somprompt's numbered marks and palette: one id, one number and one colour in the
+    # overlay, the marks pictures and the demos
+    renderer, registry = SetOfMarkRenderer(), MarkRegistry()
+    writer = H264Writer(out / "overlay.mp4", args.fps)
     records: dict[int, dict] = {}
     stage_ms: dict[str, list[float]] = {s: [] for s in STAGES}
     frame_ms: list[float] = []
@@ -105,12 +121,8 @@ def run(args: argparse.Namespace) -> int:
                     stage_ms[s].append(result.timings.get(s, 0.0))
             frames_done.append(i)
             cv2.imwrite(str(out / "labels" / f"{i:05d}.png"), result.labels.astype(np.uint16))
-            vis = cv2.cvtColor(overlay_labels(frame, result.labels), cv2.COLOR_RGB2BGR)
-            if writer is None:
-                h, w = vis.shape[:2]
-                writer = cv2.VideoWriter(str(out / "overlay.mp4"), cv2.VideoWriter_fourcc(*"mp4v"),
-                                         args.fps, (w, h))
-            writer.write(vis)
+            registry.update(result.labels, frame_index=i)
+            writer.write(renderer.render(frame, result.labels, registry).image)
             for mb in result.motionbits:
                 rec = records.setdefault(mb.id, {"id": mb.id})
                 rec.update(area=mb.area, bbox=list(mb.bbox), centroid=list(mb.centroid),
@@ -118,8 +130,7 @@ def run(args: argparse.Namespace) -> int:
                            last_seen=result.frame_index)
     finally:
         bar.close()
-        if writer is not None:
-            writer.release()
+        writer.close()
     if result is None:
         raise ValueError("the input holds no frames")
     final_ids = set(result.ids)
@@ -128,8 +139,11 @@ def run(args: argparse.Namespace) -> int:
         "frames": len(frames_done),
         "frame_indices": frames_done,
         "size": list(result.labels.shape),
-        "config": {"n_nodes": config.n_nodes, "max_side": config.max_side, "every": args.every,
-                   "start": args.start, "frames": args.frames},
+        "version": __version__,
+        "backend": seg.backend,
+        "config": dataclasses.asdict(config),  # `motionbits segment --config summary.json` repeats the run
+        "window": {"every": args.every, "start": args.start, "frames": args.frames},
+        "marks": {str(i): registry.number(i) for i in registry.ids},  # MotionBit id -> overlay number
         "motionbits": [dict(r, in_last_frame=r["id"] in final_ids) for r in
                        sorted(records.values(), key=lambda r: r["id"])],
         "timings_ms": {

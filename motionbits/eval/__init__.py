@@ -1,23 +1,29 @@
-"""MoRiBo-protocol evaluation: Overlap / Boundary P, R, F1, mIoU with Hungarian matching.
+"""MoRiBo-protocol evaluation: Overlap / Boundary P, R, F1, mIoU with Hungarian matching,
+static FP and spurious predictions.
 
 Public names:
     evaluate_frame(pred, gt, ignore=None) -> FrameScores   one final-frame label map pair
-    summarize(frames) -> {"macro": ..., "pooled": ...}      aggregate over a dataset
+    summarize(frames) -> {"macro", "pooled", "false_positives"}   aggregate over a dataset
     read_label_map / write_label_map                        16-bit PNG label maps
-    evaluate_dataset(pred_dir, gt_dir)                      MoRiBo folders (see dataset.py)
+
+MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
+:mod:`motionbits.eval.dataset`.
     adjusted_rand_index(a, b)                               agreement of two partitions
+    scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
 """
 
 from motionbits.eval.agreement import adjusted_rand_index
-from motionbits.eval.boundary import boundary_map, boundary_tolerance
+from motionbits.eval.boundary import boundary_counts, boundary_map, boundary_tolerance
 from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
-from motionbits.eval.metrics import METRIC_KEYS, FrameScores, evaluate_frame, summarize
+from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 from motionbits.eval.overlap import contingency, overlap_scores
+from motionbits.eval.sequences import scenes_from_sequence
 
 __all__ = [
     "adjusted_rand_index",
     "METRIC_KEYS",
+    "FP_KEYS",
     "FrameScores",
     "evaluate_frame",
     "summarize",
@@ -25,7 +31,9 @@ __all__ = [
     "overlap_scores",
     "hungarian_match",
     "boundary_map",
+    "boundary_counts",
     "boundary_tolerance",
     "read_label_map",
     "write_label_map",
+    "scenes_from_sequence",
 ]

@@ -15,9 +15,11 @@ from typing import Callable
 import numpy as np
 from tqdm import tqdm
 
-from motionbits.eval.dataset import average_blocks, discover_scenes, load_frames, load_ground_truth
+from motionbits.eval.dataset import (
+    discover_scenes, load_frames, load_ground_truth, summarize_tracks,
+)
 from motionbits.eval.labelmaps import write_label_map
-from motionbits.eval.metrics import FrameScores, evaluate_frame, summarize
+from motionbits.eval.metrics import FrameScores, evaluate_frame
 
 __all__ = ["run_benchmark"]
 
@@ -84,12 +86,7 @@ def run_benchmark(
     for name in methods:
         if name in unavailable:
             continue
-        tracks = {t: summarize(fs) for t, fs in by_track[name].items()}
-        results[name] = {
-            "macro": average_blocks([s["macro"] for s in tracks.values()]),
-            "pooled": average_blocks([s["pooled"] for s in tracks.values()]),
-            "tracks": tracks, "per_scene": per_scene[name],
-        }
+        results[name] = {**summarize_tracks(by_track[name]), "per_scene": per_scene[name]}
     if not results:
         raise ImportError(f"no method could run: {unavailable}")
     spf = {m: seconds[m] / max(n_frames, 1) for m in results}

@@ -1,19 +1,29 @@
-"""Boundary maps and tolerant boundary matching (the DAVIS/UOIS Boundary measure).
+"""Boundary maps and tolerant boundary matching: the DAVIS ``f_measure`` / UOIS Boundary measure.
 
-Boundary of an object: its pixels with at least one 4-neighbour *inside the image* that
-carries a different label (a 1-px inner contour). The image border is not a boundary: an
-object cut by the frame edge has no contour there. With a ``valid`` mask (the complement of
-an ignore mask), only pairs of valid neighbours are compared and only valid pixels are
-boundary pixels: a contour against an ignored pixel is unknown and dropped in both maps.
+Boundary map (``seg2bmap`` of the DAVIS and UOIS code, D. Martin's BSDS definition): a pixel
+is a boundary pixel of a segmentation if its east, south or south-east neighbour *inside the
+image* carries a different label. The contour therefore sits half a pixel towards the
+origin: on an object's left and top sides it is the background pixel next to the object, on
+its right and bottom sides the object's own pixel. The image border is not a contour.
 
-Tolerance: ``tol = ceil(0.003 * image diagonal)`` px (3 px at 480x640, as in the DAVIS and
-UOIS code). A boundary pixel of one mask matches if it lies inside the other mask's boundary
-dilated by a disk of radius ``tol`` (Euclidean distance <= tol).
+The boundary of one object k is the ``seg2bmap`` of its binary mask ``labels == k``: the
+pixels whose 2x2 block (the pixel and its in-image E, S, SE neighbours) contains k and
+another label. A pixel between two objects belongs to both boundaries.
 
-For a matched pair (g, p) with boundaries B_g, B_p:
+Ignore-aware variant (a ``valid`` mask, the complement of a scene's ``ignore.png``): an
+ignored pixel is no boundary pixel, and a neighbour that is ignored is not compared, so a
+contour against an ignored region is unknown and dropped in both maps. Without ignored
+pixels the two definitions coincide.
+
+Tolerance: ``tol = ceil(0.003 * image diagonal)`` px (3 px at 480x640, as in the UOIS code).
+A boundary pixel of one object matches if it lies within Euclidean distance ``tol`` of the
+other object's boundary (dilation by the disk ``x^2 + y^2 <= tol^2``, as
+``skimage.morphology.disk``). For a matched pair (g, p) with boundaries B_g, B_p:
 
     BP(g, p) = |B_p ∩ dilate(B_g)| / |B_p|     BR(g, p) = |B_g ∩ dilate(B_p)| / |B_g|
     BF(g, p) = 2 BP BR / (BP + BR)
+
+with the DAVIS edge cases (no B_p: BP = 1; no B_g: BR = 1, so both empty scores 1).
 """
 
 from __future__ import annotations
@@ -23,7 +33,7 @@ import math
 import cv2
 import numpy as np
 
-__all__ = ["boundary_map", "boundary_tolerance", "disk", "pair_boundary_hits"]
+__all__ = ["boundary_map", "boundary_counts", "boundary_tolerance", "disk", "pair_boundary_hits"]
 
 
 def boundary_tolerance(shape: tuple[int, ...], fraction: float = 0.003) -> int:
@@ -39,32 +49,75 @@ def disk(radius: int) -> np.ndarray:
     return ((x * x + y * y) <= r * r).astype(np.uint8)
 
 
+#: (dy, dx) of the neighbours a pixel is compared with: east, south, south-east.
+_STEPS = ((0, 1), (1, 0), (1, 1))
+
+
+def _differs(labels: np.ndarray, valid: np.ndarray | None, dy: int, dx: int) -> np.ndarray:
+    """(H - dy, W - dx) bool: pixel differs from its (dy, dx) neighbour, both valid."""
+    h, w = labels.shape
+    here, there = labels[: h - dy, : w - dx], labels[dy:, dx:]
+    out = here != there
+    if valid is not None:
+        out &= valid[: h - dy, : w - dx] & valid[dy:, dx:]
+    return out
+
+
+def _edges(labels: np.ndarray, valid: np.ndarray | None) -> np.ndarray:
+    edge = np.zeros(labels.shape, dtype=bool)
+    h, w = labels.shape
+    for dy, dx in _STEPS:
+        edge[: h - dy, : w - dx] |= _differs(labels, valid, dy, dx)
+    return edge
+
+
 def boundary_map(labels: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
-    """1-px inner boundaries of all objects of a label map at once.
+    """``seg2bmap`` of a segmentation: pixels whose E, S or SE neighbour has another label.
 
     Args:
-        labels: (H, W) integer labels, 0 = background.
-        valid: optional (H, W) bool; False pixels are neither boundary pixels nor compared.
+        labels: (H, W) integer or bool segmentation (a binary mask gives one object's
+            boundary, exactly DAVIS ``seg2bmap``).
+        valid: optional (H, W) bool; False pixels are no boundary pixels and are not
+            compared with their neighbours.
 
     Returns:
-        (H, W) bool: True at object pixels (label > 0) having a 4-neighbour within the image
-        with a different label. Each boundary pixel belongs to the boundary of its own label,
-        so ``labels[boundary]`` splits it into the per-object boundaries.
+        (H, W) bool boundary map (background pixels next to an object included).
     """
     lab = np.asarray(labels)
-    edge = np.zeros(lab.shape, dtype=bool)
-    diff_v = lab[1:, :] != lab[:-1, :]
-    diff_h = lab[:, 1:] != lab[:, :-1]
-    if valid is not None:
-        valid = np.asarray(valid, dtype=bool)
-        diff_v &= valid[1:, :] & valid[:-1, :]
-        diff_h &= valid[:, 1:] & valid[:, :-1]
-    edge[1:, :] |= diff_v
-    edge[:-1, :] |= diff_v
-    edge[:, 1:] |= diff_h
-    edge[:, :-1] |= diff_h
-    edge &= lab > 0
-    return edge if valid is None else edge & valid
+    return _edges(lab, None if valid is None else np.asarray(valid, dtype=bool))
+
+
+def boundary_counts(index: np.ndarray, n: int, valid: np.ndarray | None = None) -> np.ndarray:
+    """Boundary size of every object of a compact index map, all objects at once.
+
+    Equal to ``[boundary_map(index == k, valid).sum() for k in 1..n]``: a pixel counts for
+    every object present in its 2x2 block (itself and its in-image, valid E, S, SE
+    neighbours) when that block holds more than one label.
+
+    Args:
+        index: (H, W) int64 labels in 0..n (0 = background, not counted).
+        n: number of objects.
+        valid: optional (H, W) bool as in :func:`boundary_map`.
+
+    Returns:
+        (n,) int64 boundary pixels of objects 1..n.
+    """
+    idx = np.asarray(index, dtype=np.int64)
+    v = None if valid is None else np.asarray(valid, dtype=bool)
+    h, w = idx.shape
+    ys, xs = np.nonzero(_edges(idx, v))
+    own = idx[ys, xs]
+    block = [own]
+    for dy, dx in _STEPS:
+        # Out-of-image neighbours clamp to the pixel itself or to its E / S neighbour, whose
+        # label is in the block already; invalid ones take the pixel's own label.
+        ny, nx = np.minimum(ys + dy, h - 1), np.minimum(xs + dx, w - 1)
+        lab = idx[ny, nx]
+        block.append(lab if v is None else np.where(v[ny, nx], lab, own))
+    block = np.sort(np.stack(block, axis=1), axis=1)
+    first = np.ones(block.shape, dtype=bool)
+    first[:, 1:] = block[:, 1:] != block[:, :-1]  # each distinct label of a block once
+    return np.bincount(block[first], minlength=n + 1)[1 : n + 1].astype(np.int64)
 
 
 def pair_boundary_hits(
@@ -73,8 +126,8 @@ def pair_boundary_hits(
     """Tolerant boundary hits of one (GT, predicted) pair.
 
     Args:
-        b_gt: (h, w) bool boundary of the GT object (a crop is fine if it keeps ``tol`` px of
-            margin around both boundaries).
+        b_gt: (h, w) bool boundary of the GT object (a crop is fine if it holds both
+            boundaries whole).
         b_pred: (h, w) bool boundary of the predicted object, same frame.
         tol: match tolerance in px.
         kernel: optional ``disk(tol)`` (pass it to avoid rebuilding it).

@@ -1,6 +1,6 @@
 """MoRiBo-format folders: scenes, tracks, ground truth, predictions, and dataset scoring.
 
-Layout (DESIGN.md section 3)::
+Layout (see docs/evaluation.md)::
 
     <scene>/frames/00000.jpg ...   ordered frames (any image suffix)
     <scene>/gt.png                 16-bit (or 8-bit / indexed) label map of the final frame
@@ -25,11 +25,11 @@ import numpy as np
 from tqdm import tqdm
 
 from motionbits.eval.labelmaps import read_label_map
-from motionbits.eval.metrics import METRIC_KEYS, FrameScores, evaluate_frame, summarize
+from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 
 __all__ = [
     "Scene", "discover_scenes", "is_scene", "scene_frames", "load_frames", "load_ground_truth",
-    "find_prediction", "read_prediction", "evaluate_dataset", "average_blocks",
+    "find_prediction", "read_prediction", "evaluate_dataset", "average_blocks", "summarize_tracks",
 ]
 
 _IMG = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
@@ -172,13 +172,31 @@ def read_prediction(path: str | os.PathLike) -> np.ndarray:
     return read_label_map(path)
 
 
-def average_blocks(blocks: list[dict[str, float]]) -> dict[str, float]:
+def average_blocks(blocks: list[dict[str, float]], keys: tuple[str, ...] = METRIC_KEYS
+                   ) -> dict[str, float]:
     """Key-wise mean of summary blocks, ignoring NaN (used to average over tracks)."""
     out = {}
-    for key in METRIC_KEYS:
+    for key in keys:
         vals = [b[key] for b in blocks if b.get(key) is not None and not np.isnan(b[key])]
         out[key] = float(np.mean(vals)) if vals else float("nan")
     return out
+
+
+def summarize_tracks(by_track: dict[str, list[FrameScores]]) -> dict:
+    """Per-track summaries and their mean over tracks.
+
+    Returns:
+        ``{"macro", "pooled", "false_positives"}`` (each the mean over tracks of the track
+        blocks) and ``"tracks": {track: summarize(frames)}``.
+    """
+    tracks = {t: summarize(fs) for t, fs in by_track.items()}
+    return {
+        "macro": average_blocks([s["macro"] for s in tracks.values()]),
+        "pooled": average_blocks([s["pooled"] for s in tracks.values()]),
+        "false_positives": average_blocks([s["false_positives"] for s in tracks.values()],
+                                          FP_KEYS),
+        "tracks": tracks,
+    }
 
 
 def evaluate_dataset(
@@ -198,9 +216,10 @@ def evaluate_dataset(
         progress: show a tqdm bar.
 
     Returns:
-        ``{"macro", "pooled"}`` averaged over tracks, ``"tracks": {track: summary}``
-        (see :func:`summarize`) and ``"per_scene": {"track/scene": FrameScores.to_dict()}``;
-        all scores are fractions in [0, 1].
+        :func:`summarize_tracks` of the scenes (``"macro"``, ``"pooled"``,
+        ``"false_positives"`` averaged over tracks, ``"tracks"``) and ``"per_scene":
+        {"track/scene": FrameScores.to_dict()}``; scores are fractions in [0, 1] except
+        ``spurious`` (predicted objects per scene).
     """
     if missing not in ("error", "empty"):
         raise ValueError(f"missing must be 'error' or 'empty', got {missing!r}")
@@ -229,10 +248,4 @@ def evaluate_dataset(
             raise ValueError(f"scene {scene.key}: {exc}") from exc
         by_track.setdefault(scene.track, []).append(scores)
         per_scene[scene.key] = scores.to_dict()
-    tracks = {t: summarize(fs) for t, fs in by_track.items()}
-    return {
-        "macro": average_blocks([s["macro"] for s in tracks.values()]),
-        "pooled": average_blocks([s["pooled"] for s in tracks.values()]),
-        "tracks": tracks,
-        "per_scene": per_scene,
-    }
+    return {**summarize_tracks(by_track), "per_scene": per_scene}

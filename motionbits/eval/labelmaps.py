@@ -13,29 +13,11 @@ import cv2
 import numpy as np
 from PIL import Image
 
+from motionbits.objects import check_label_map  # the one label-map check of the toolkit
+
 __all__ = ["check_label_map", "compact_labels", "read_label_map", "write_label_map"]
 
 _LUT_MAX = 1 << 20  # labels up to this value are compacted with a lookup table, not a sort
-
-
-def check_label_map(labels: np.ndarray, *, name: str = "label map") -> np.ndarray:
-    """Validate an (H, W) integer label map with non-negative labels; return it as int64.
-
-    Raises:
-        TypeError: not a numpy integer (or bool) array.
-        ValueError: not two-dimensional, or holds negative labels.
-    """
-    if not isinstance(labels, np.ndarray):
-        raise TypeError(f"{name} must be a numpy array, got {type(labels).__name__}")
-    if labels.dtype == bool:
-        labels = labels.astype(np.int64)
-    if not np.issubdtype(labels.dtype, np.integer):
-        raise TypeError(f"{name} must hold integer labels, got dtype {labels.dtype}")
-    if labels.ndim != 2:
-        raise ValueError(f"{name} must have shape (H, W), got {labels.shape}")
-    if labels.size and labels.min() < 0:
-        raise ValueError(f"{name} holds negative labels (min {labels.min()}); 0 is background")
-    return labels.astype(np.int64, copy=False)
 
 
 def compact_labels(flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

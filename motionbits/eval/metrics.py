@@ -1,19 +1,19 @@
 """MoRiBo-protocol scores of one frame and their aggregation over a dataset.
 
-Protocol (paper section 6.1; DESIGN.md section 3), on the final frame of each video:
+Protocol (paper section 6.1; docs/evaluation.md), on the final frame of each video:
 
 1. Every (GT object g, predicted object p) pair gets the overlap F of
    P = tp/|P|, R = tp/|G| (``overlap.py``).
 2. Hungarian assignment maximising the total F (``matching.py``); pairs with no common
    pixel are not matches.
 3. **Per GT instance** (the paper's numbers): its matched pair gives IoU, P, R, F1 and, on the
-   same assignment, Boundary P, R, F1 (``boundary.py``). An unmatched GT object scores 0 on
-   everything.
+   same assignment, Boundary P, R, F1 (``boundary.py``: DAVIS ``seg2bmap`` contours, a disk
+   of ``ceil(0.003 * diagonal)`` px). An unmatched GT object scores 0 on everything.
 4. **Macro average** ("each instance weighted equally"): the mean of each per-instance number
    over all GT instances of the dataset (or track). F1 is the mean of the per-instance F1,
    not the F1 of the mean P and R. Unmatched *predictions* add no instance and so do not
-   lower the macro numbers; they show up only in the pooled variant. A video whose GT is
-   empty contributes no instance to the macro average.
+   lower the macro numbers; they show up in the pooled variant and as *spurious*. A video
+   whose GT is empty contributes no instance to the macro average.
 5. **Pooled per image** (UOIS/OCID, Xie et al. 2021), averaged over images:
    P = sum of matched tp / all predicted object pixels (unmatched predictions included),
    R = sum of matched tp / all GT object pixels, F1 = 2PR/(P+R); Boundary likewise with
@@ -23,10 +23,21 @@ Protocol (paper section 6.1; DESIGN.md section 3), on the final frame of each vi
    GT but no prediction -> P = BP = 1, everything else 0; prediction but no GT ->
    R = BR = 1, everything else 0.
 6. **%75** in the macro block: fraction of all GT instances with overlap F1 >= 0.75.
+7. **False positives** of a frame: *static FP* = |static ∩ predicted| / |static|, where
+   static = GT background (label 0) not ignored and predicted = any label > 0; *spurious* =
+   number of predicted objects that the assignment of step 2 leaves unmatched (matched to
+   no GT object, or only with zero overlap). Over a set of frames: ``static_fp`` pools the
+   pixels (sum of static FP pixels / sum of static pixels), ``static_fp_scene`` is the mean
+   of the per-frame shares (frames without static pixels left out), ``spurious`` the mean
+   count per frame.
 
-An optional ignore mask removes pixels from both maps: they count in no tp, |P| or |G|,
-they are no boundary pixels, and a contour between a kept and an ignored pixel is dropped
-in both maps (so the edge of the ignored region creates no artificial contour).
+An optional ignore mask removes pixels from both maps: they count in no tp, |P|, |G| or
+static pixel; a predicted object all of whose pixels are ignored does not exist (it is not
+spurious); ignored pixels are no boundary pixels and a contour between a kept and an ignored
+pixel is dropped in both maps (so the edge of the ignored region creates no artificial
+contour). Without an ignore mask the Boundary numbers are those of the DAVIS / UOIS code,
+except that a GT object and a prediction with no common pixel are never paired (UOIS's
+Munkres may pair leftovers at F = 0, whose boundary hits it then counts).
 
 F1 >= 0.75 is tested with a 1e-9 slack so that an exact 3/4 (e.g. P = 1, R = 0.6) counts.
 """
@@ -39,14 +50,20 @@ from typing import Iterable
 import numpy as np
 from scipy import ndimage
 
-from motionbits.eval.boundary import boundary_map, boundary_tolerance, disk, pair_boundary_hits
+from motionbits.eval.boundary import (
+    boundary_counts, boundary_map, boundary_tolerance, disk, pair_boundary_hits,
+)
 from motionbits.eval.matching import hungarian_match
 from motionbits.eval.overlap import contingency, overlap_scores
 
-__all__ = ["FrameScores", "evaluate_frame", "summarize", "METRIC_KEYS", "INSTANCE_KEYS"]
+__all__ = ["FrameScores", "evaluate_frame", "summarize", "METRIC_KEYS", "INSTANCE_KEYS", "FP_KEYS"]
 
 #: Keys of a summary block, in the paper's Table 2 column order (plus %75).
 METRIC_KEYS = ("P", "R", "F1", "mIoU", "BP", "BR", "BF1", "pct75")
+#: Keys of the false-positive block (see the module docstring, step 7).
+FP_KEYS = ("static_fp", "static_fp_scene", "spurious")
+#: Label maps with labels below this are indexed with a lookup table, larger ones by a sort.
+_LUT_MAX = 1 << 20
 #: Overlap F1 threshold of the %75 figure.
 F75 = 0.75
 #: Per-instance arrays of :class:`FrameScores` behind the macro keys.
@@ -65,7 +82,9 @@ class FrameScores:
     """Scores of one (prediction, GT) pair of label maps.
 
     Per-instance arrays have shape (K,) float64, one entry per GT object in ``gt_ids`` order;
-    unmatched GT objects have 0 everywhere and ``matched_pred`` 0.
+    unmatched GT objects have 0 everywhere and ``matched_pred`` 0. ``static_pixels`` counts
+    the non-ignored GT background pixels, ``static_fp_pixels`` those of them carrying a
+    predicted label, ``spurious`` the predicted objects left unmatched.
     """
 
     gt_ids: np.ndarray
@@ -79,6 +98,9 @@ class FrameScores:
     brecall: np.ndarray
     bf1: np.ndarray
     pooled: dict[str, float] = field(default_factory=dict)
+    static_pixels: int = 0
+    static_fp_pixels: int = 0
+    spurious: int = 0
 
     @property
     def n_gt(self) -> int:
@@ -88,17 +110,27 @@ class FrameScores:
     def n_pred(self) -> int:
         return int(self.pred_ids.size)
 
+    @property
+    def static_fp(self) -> float:
+        """Share of static (non-ignored GT background) pixels carrying a predicted label;
+        NaN when the frame has no static pixel."""
+        return self.static_fp_pixels / self.static_pixels if self.static_pixels else float("nan")
+
     def macro(self) -> dict[str, float]:
         """Macro block of this frame alone (mean over its GT instances; NaN if none)."""
         return summarize([self])["macro"]
 
     def to_dict(self) -> dict:
-        """JSON-ready summary: counts, this frame's macro and pooled blocks, per instance."""
+        """JSON-ready summary: counts, this frame's macro, pooled and false-positive blocks,
+        per instance."""
         return {
             "n_gt": self.n_gt,
             "n_pred": self.n_pred,
             "macro": self.macro(),
             "pooled": dict(self.pooled),
+            "false_positives": {"static_fp": self.static_fp, "spurious": self.spurious,
+                                "static_pixels": self.static_pixels,
+                                "static_fp_pixels": self.static_fp_pixels},
             "instances": [
                 {"gt": int(g), "pred": int(p), "P": float(a), "R": float(b), "F1": float(c),
                  "IoU": float(d), "BP": float(e), "BR": float(f), "BF1": float(h)}
@@ -160,14 +192,12 @@ def evaluate_frame(
     f1[rows] = sc["F"][rows, cols]
     matched[rows] = c.pred_ids[cols]
 
-    # Boundaries on the full maps, then ignored pixels dropped.
-    keep = np.ones(gt.shape, bool) if ignore is None else ~np.asarray(ignore, bool)
+    # Boundaries (DAVIS seg2bmap of each object's mask), ignored pixels dropped.
+    keep = None if ignore is None else ~np.asarray(ignore, bool)
     g_idx = _index_map(gt, c.gt_ids, keep)
     p_idx = _index_map(pred, c.pred_ids, keep)
-    b_gt = boundary_map(gt, keep)
-    b_pred = boundary_map(pred, keep)
-    nb_gt = np.bincount(g_idx[b_gt], minlength=k + 1)[1:]
-    nb_pred = np.bincount(p_idx[b_pred], minlength=m + 1)[1:]
+    nb_gt = boundary_counts(g_idx, k, keep)
+    nb_pred = boundary_counts(p_idx, m, keep)
     tol = boundary_tolerance(gt.shape) if tolerance is None else int(tolerance)
     kernel = disk(tol)
     g_sl = ndimage.find_objects(g_idx.astype(np.int32), max_label=k) if k else []
@@ -175,11 +205,14 @@ def evaluate_frame(
     hits_p = np.zeros(len(rows), np.int64)
     hits_r = np.zeros(len(rows), np.int64)
     for n, (r, col) in enumerate(zip(rows, cols)):
-        win = _union_window(g_sl[r], p_sl[col], tol, gt.shape)
-        bg = b_gt[win] & (g_idx[win] == r + 1)
-        bp = b_pred[win] & (p_idx[win] == col + 1)
+        # The window holds both objects plus a margin: their whole boundaries (which reach
+        # 1 px up and left of the object) and no foreign contour at the crop's edge.
+        win = _union_window(g_sl[r], p_sl[col], 2, gt.shape)
+        valid = None if keep is None else keep[win]
+        bg = boundary_map(g_idx[win] == r + 1, valid)
+        bp = boundary_map(p_idx[win] == col + 1, valid)
         hits_p[n], hits_r[n] = pair_boundary_hits(bg, bp, tol, kernel)
-        # A boundary with no pixel (object filling the image) is vacuously matched.
+        # DAVIS edge cases: no predicted contour -> BP = 1, no GT contour -> BR = 1.
         bprec[r] = hits_p[n] / nb_pred[col] if nb_pred[col] else 1.0
         brec[r] = hits_r[n] / nb_gt[r] if nb_gt[r] else 1.0
     bf1 = _f1(bprec, brec)
@@ -196,31 +229,40 @@ def evaluate_frame(
             "BP": float(bp_all), "BR": float(br_all), "BF1": float(_f1(bp_all, br_all)),
             "pct75": float(np.mean(f1 >= F75 - 1e-9)),
         }
+    static = c.table[0, :]  # GT background row: [unpredicted, predicted objects...]
     return FrameScores(
         gt_ids=c.gt_ids, pred_ids=c.pred_ids, matched_pred=matched, iou=iou, precision=prec,
         recall=rec, f1=f1, bprecision=bprec, brecall=brec, bf1=bf1,
         pooled={key: float(v) for key, v in pooled.items()},
+        static_pixels=int(static.sum()), static_fp_pixels=int(static[1:].sum()),
+        spurious=int(m - len(rows)),
     )
 
 
-def _index_map(labels: np.ndarray, ids: np.ndarray, keep: np.ndarray) -> np.ndarray:
+def _index_map(labels: np.ndarray, ids: np.ndarray, keep: np.ndarray | None) -> np.ndarray:
     """(H, W) int64 compact index (1..K for ``ids``, 0 elsewhere and at ignored pixels)."""
-    out = np.zeros(labels.shape, np.int64)
-    if ids.size:
-        pos = np.searchsorted(ids, labels)
-        pos = np.minimum(pos, ids.size - 1)
-        hit = (ids[pos] == labels) & keep & (labels > 0)
-        out[hit] = pos[hit] + 1
+    if not ids.size:
+        return np.zeros(labels.shape, np.int64)
+    top = int(labels.max())
+    if top < _LUT_MAX:
+        lut = np.zeros(top + 1, np.int64)
+        lut[ids] = np.arange(1, ids.size + 1)
+        out = lut[labels]
+    else:
+        pos = np.minimum(np.searchsorted(ids, labels), ids.size - 1)
+        out = np.where((ids[pos] == labels) & (labels > 0), pos + 1, 0)
+    if keep is not None:
+        out[~keep] = 0
     return out
 
 
-def _union_window(a: tuple[slice, slice] | None, b: tuple[slice, slice] | None, tol: int,
+def _union_window(a: tuple[slice, slice] | None, b: tuple[slice, slice] | None, margin: int,
                   shape: tuple[int, int]) -> tuple[slice, slice]:
     boxes = [s for s in (a, b) if s is not None]
-    y0 = max(0, min(s[0].start for s in boxes) - tol - 1)
-    y1 = min(shape[0], max(s[0].stop for s in boxes) + tol + 1)
-    x0 = max(0, min(s[1].start for s in boxes) - tol - 1)
-    x1 = min(shape[1], max(s[1].stop for s in boxes) + tol + 1)
+    y0 = max(0, min(s[0].start for s in boxes) - margin)
+    y1 = min(shape[0], max(s[0].stop for s in boxes) + margin)
+    x0 = max(0, min(s[1].start for s in boxes) - margin)
+    x1 = min(shape[1], max(s[1].stop for s in boxes) + margin)
     return slice(y0, y1), slice(x0, x1)
 
 
@@ -228,9 +270,10 @@ def summarize(frames: Iterable[FrameScores]) -> dict:
     """Aggregate frames into the macro (per GT instance) and pooled (per image) blocks.
 
     Returns:
-        ``{"macro": {key: float}, "pooled": {key: float}, "n_images": int,
-        "n_instances": int}`` with keys ``METRIC_KEYS``; fractions in [0, 1]. The macro block
-        is NaN when there is no GT instance; the pooled block when there is no image.
+        ``{"macro": {key: float}, "pooled": {key: float}, "false_positives": {key: float},
+        "n_images": int, "n_instances": int}`` with keys ``METRIC_KEYS`` and ``FP_KEYS``;
+        fractions in [0, 1] except ``spurious`` (a mean count per image). The macro block is
+        NaN when there is no GT instance; the others when there is no image.
     """
     frames = list(frames)
     n_inst = sum(f.n_gt for f in frames)
@@ -244,4 +287,12 @@ def summarize(frames: Iterable[FrameScores]) -> dict:
         key: (float(np.mean([f.pooled[key] for f in frames])) if frames else float("nan"))
         for key in METRIC_KEYS
     }
-    return {"macro": macro, "pooled": pooled, "n_images": len(frames), "n_instances": n_inst}
+    static = sum(f.static_pixels for f in frames)
+    shares = [f.static_fp for f in frames if f.static_pixels]
+    fp = {
+        "static_fp": sum(f.static_fp_pixels for f in frames) / static if static else float("nan"),
+        "static_fp_scene": float(np.mean(shares)) if shares else float("nan"),
+        "spurious": float(np.mean([f.spurious for f in frames])) if frames else float("nan"),
+    }
+    return {"macro": macro, "pooled": pooled, "false_positives": fp, "n_images": len(frames),
+            "n_instances": n_inst}

@@ -1,0 +1,82 @@
+"""A :class:`MotionBitsConfig` from a TOML or JSON file (``motionbits segment --config``).
+
+The file holds any of the config's fields at the top level, e.g. ``n_nodes = 2500`` in
+TOML or ``{"n_nodes": 2500}`` in JSON; fields left out keep their defaults. The
+``summary.json`` that ``motionbits segment`` writes is accepted too (its ``"config"``
+entry is read), so a run can be repeated from its summary.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any, Mapping
+
+from motionbits.config import MotionBitsConfig
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, from PyPI
+    import tomli as tomllib
+
+__all__ = ["config_from_dict", "load_config"]
+
+_TYPES = {"int": int, "float": float, "bool": bool, "str": str}
+
+
+def config_from_dict(values: Mapping[str, Any], *, source: str = "config") -> MotionBitsConfig:
+    """A config with the given fields set (others at their defaults).
+
+    Raises:
+        ValueError: an unknown field, a value of the wrong type, or a value the config
+            refuses (the message names the field).
+    """
+    fields = {f.name: f for f in dataclasses.fields(MotionBitsConfig)}
+    unknown = sorted(set(values) - set(fields))
+    if unknown:
+        raise ValueError(f"{source}: unknown MotionBitsConfig field(s) {', '.join(unknown)}; "
+                         f"valid fields: {', '.join(fields)}")
+    checked = {}
+    for name, value in values.items():
+        want = _TYPES.get(fields[name].type, object)  # other types: the config checks them
+        ok = isinstance(value, want) and not (want in (int, float) and isinstance(value, bool))
+        if want is float and isinstance(value, int) and not isinstance(value, bool):
+            ok, value = True, float(value)
+        if not ok:
+            raise ValueError(f"{source}: {name} must be {fields[name].type}, got {value!r}")
+        checked[name] = value
+    return MotionBitsConfig(**checked)
+
+
+def load_config(path: "str | os.PathLike", **overrides: Any) -> MotionBitsConfig:
+    """Read a config from ``path`` (``.toml`` or ``.json``), then apply ``overrides``.
+
+    Example:
+        >>> import tempfile, pathlib
+        >>> p = pathlib.Path(tempfile.mkdtemp()) / "fast.toml"
+        >>> _ = p.write_text("n_nodes = 2500\\nmcl_inflation = 1.2\\n")
+        >>> c = load_config(p, max_side=320)
+        >>> c.n_nodes, c.mcl_inflation, c.max_side, c.k_neighbors
+        (2500, 1.2, 320, 5)
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"config file {path} does not exist")
+    text = path.read_text(encoding="utf-8")
+    try:
+        if path.suffix.lower() == ".toml":
+            data = tomllib.loads(text)
+        elif path.suffix.lower() == ".json":
+            data = json.loads(text)
+        else:
+            raise ValueError(f"config file {path} must end in .toml or .json")
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"config file {path} is not valid {path.suffix[1:].upper()}: {exc}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"config file {path} must hold a table/object of MotionBitsConfig fields")
+    if isinstance(data.get("config"), dict):  # a summary.json of `motionbits segment`
+        data = data["config"]
+    return config_from_dict({**data, **overrides}, source=str(path))

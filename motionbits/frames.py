@@ -1,0 +1,83 @@
+"""Frames in one form, and which frames to show: the helpers every package shares.
+
+``somprompt`` and ``vlm_adapters`` use these (never copies), so a frame is accepted or
+refused, and a clip is sampled, the same way everywhere. Imports only numpy.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["as_rgb_array", "sample_frame_indices"]
+
+
+def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
+    """One frame as a C-contiguous (H, W, 3) uint8 RGB array (no copy when it already is).
+
+    Accepted: (H, W, 3) uint8 RGB; (H, W) or (H, W, 1) uint8 greyscale (replicated to
+    three channels); (H, W, 4) uint8 RGBA (alpha dropped); a PIL image of any mode
+    (converted to RGB). Float images are refused rather than guessed at ([0, 1] or
+    [0, 255]?): the error says how to convert them.
+
+    Args:
+        frame: the frame.
+        name: what to call it in error messages.
+
+    Raises:
+        TypeError: not an array or PIL image, or not uint8.
+        ValueError: wrong number of dimensions or channels, or an empty image.
+
+    Example:
+        >>> as_rgb_array(np.zeros((2, 3), np.uint8)).shape
+        (2, 3, 3)
+    """
+    if hasattr(frame, "convert") and hasattr(frame, "size") and not isinstance(frame, np.ndarray):
+        frame = np.asarray(frame.convert("RGB"))  # PIL image, without importing PIL here
+    if not isinstance(frame, np.ndarray):
+        raise TypeError(
+            f"{name} must be an (H, W, 3) uint8 RGB numpy array or a PIL image, got {type(frame).__name__}"
+        )
+    if frame.dtype != np.uint8:
+        hint = (
+            "; convert floats in [0, 1] with np.clip(img * 255, 0, 255).astype(np.uint8)"
+            if np.issubdtype(frame.dtype, np.floating) else ""
+        )
+        raise TypeError(f"{name} must be uint8 RGB, got dtype {frame.dtype}{hint}")
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        frame = frame[..., 0]
+    if frame.ndim == 2:
+        frame = np.repeat(frame[..., None], 3, axis=2)
+    elif frame.ndim == 3 and frame.shape[2] == 4:
+        frame = frame[..., :3]
+    if frame.ndim != 3 or frame.shape[2] != 3:
+        raise ValueError(
+            f"{name} must have shape (H, W, 3) (RGB), (H, W) (greyscale) or (H, W, 4) (RGBA); "
+            f"got {frame.shape}"
+        )
+    if frame.shape[0] == 0 or frame.shape[1] == 0:
+        raise ValueError(f"{name} is empty: shape {frame.shape}")
+    return np.ascontiguousarray(frame)
+
+
+def sample_frame_indices(num_total: int, num_frames: int | None) -> list[int]:
+    """Indices of up to ``num_frames`` frames spread evenly over ``num_total``; the last
+    frame is always kept (the paper scores it), and the first too when two or more are
+    asked for.
+
+    ``None`` or ``num_frames >= num_total`` keeps every frame.
+
+    Example:
+        >>> sample_frame_indices(10, 4), sample_frame_indices(10, 1)
+        ([0, 3, 6, 9], [9])
+    """
+    if num_total < 1:
+        raise ValueError(f"there are no frames to sample from (num_total = {num_total})")
+    if num_frames is None or num_frames >= num_total:
+        return list(range(num_total))
+    if num_frames < 1:
+        raise ValueError(f"num_frames must be >= 1 or None, got {num_frames}")
+    if num_frames == 1:
+        return [num_total - 1]
+    return sorted({int(round(v)) for v in np.linspace(0, num_total - 1, num_frames)})

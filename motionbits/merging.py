@@ -1,0 +1,172 @@
+"""One rigid body, one MotionBit: merging MotionBits whose motions agree over time (ours).
+
+The paper defines a MotionBit as the points that share one twist trajectory. Clustering a
+single frame's twists splits a body wherever its flow is ambiguous (a textureless link
+moving along itself, a part turning in depth), and the temporal constraints then keep the
+pieces apart for good. This module joins them again at the level of MotionBit ids:
+
+- two MotionBits that touch *agree* at a frame when one motion (an affine map, which also
+  absorbs the scale change of a part moving in depth) fitted to both explains the images of
+  each about as well as its own motion does (photometric residual, grey levels);
+- they *disagree* when that union motion explains one of them clearly worse, or when one
+  was born out of pixels that had never moved while the other was moving (background
+  counts as a label in the paper: a point that moved and one that did not are never one
+  rigid body -- this keeps a pushed block apart from the gripper that pushes it);
+- MotionBits that agreed at some frame and never disagreed form one group, shown under the
+  group's oldest id. Disagreement is final; a group that loses a member splits again.
+
+State is one small set of id pairs per relation; nothing grows with the video's length
+except the number of ids.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+__all__ = ["touching_pairs", "fit_affine", "photometric_residual", "MotionBitGroups"]
+
+
+def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
+    """Pairs (a, b), a < b, of non-zero labels whose masks come within ``reach`` px.
+
+    Args:
+        labels: (H, W) int label map.
+        reach: px (>= 1).
+    """
+    lab = labels.astype(np.int32)
+    kernel = np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)
+    pairs: set[tuple[int, int]] = set()
+    grown_max = cv2.dilate(lab.astype(np.float32), kernel)
+    grown_min = -cv2.dilate(-np.where(lab > 0, lab, np.iinfo(np.int32).max).astype(np.float32),
+                            kernel)
+    for a_map, b_map in ((lab, grown_max), (lab, grown_min)):
+        sel = (a_map > 0) & (b_map > 0) & (b_map != a_map) & (b_map < np.iinfo(np.int32).max)
+        if sel.any():
+            a = a_map[sel].astype(np.int64)
+            b = b_map[sel].astype(np.int64)
+            key = np.unique(np.minimum(a, b) * (1 << 31) + np.maximum(a, b))
+            pairs.update((int(k >> 31), int(k & ((1 << 31) - 1))) for k in key)
+    return pairs
+
+
+def fit_affine(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """(2, 3) weighted least-squares affine map q ~ A [p; 1] (current -> previous)."""
+    x = np.hstack([points, np.ones((len(points), 1))]).astype(np.float64)
+    sw = np.sqrt(np.maximum(weights, 1e-6))[:, None]
+    sol, *_ = np.linalg.lstsq(x * sw, back_points.astype(np.float64) * sw, rcond=None)
+    return sol.T
+
+
+def photometric_residual(cur: np.ndarray, prev: np.ndarray, motion: np.ndarray,
+                         box: tuple[slice, slice], window: int = 3) -> np.ndarray:
+    """Mean absolute grey-level difference between ``cur`` and ``prev`` pulled back by the
+    (2, 3) backward map ``motion`` (``out(p) = prev(motion [p; 1])``), over a ``window``
+    square, on the image box ``box``; the box is grown by the window radius (clipped to the
+    image) so that the result is the whole-image one, cropped."""
+    h, w = cur.shape
+    r = window // 2
+    y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
+    x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
+    m = motion.astype(np.float64).copy()
+    m[:, 2] += m[:, 0] * x0 + m[:, 1] * y0  # output origin moved to (x0, y0)
+    warped = cv2.warpAffine(prev, m.astype(np.float32), (x1 - x0, y1 - y0),
+                            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                            borderMode=cv2.BORDER_REPLICATE)
+    cost = cv2.blur(np.abs(cur[y0:y1, x0:x1] - warped), (window, window))
+    return cost[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0]
+
+
+class MotionBitGroups:
+    """Which MotionBit ids show one rigid body (the agree / disagree relations above).
+
+    Args:
+        agree: grey levels; a union motion within this of each member's own residual agrees.
+        disagree: grey levels; beyond this for either member, the two disagree for good.
+    """
+
+    def __init__(self, agree: float, disagree: float) -> None:
+        self.agree_tol, self.disagree_tol = agree, disagree
+        self._agree: set[tuple[int, int]] = set()
+        self._disagree: set[tuple[int, int]] = set()
+
+    @staticmethod
+    def _key(a: int, b: int) -> tuple[int, int]:
+        return (a, b) if a < b else (b, a)
+
+    def forbid(self, a: int, others) -> None:
+        """``a`` and each of ``others`` are different bodies, for good."""
+        for b in others:
+            if b != a:
+                key = self._key(int(a), int(b))
+                self._disagree.add(key)
+                self._agree.discard(key)
+
+    def known(self, a: int, b: int) -> bool:
+        return self._key(a, b) in self._disagree
+
+    def observe(self, a: int, b: int, excess: float) -> None:
+        """Record one frame's test: ``excess`` = how much worse (grey levels) the union
+        motion explains the worse-explained member than its own motion does."""
+        key = self._key(a, b)
+        if key in self._disagree:
+            return
+        if excess > self.disagree_tol:
+            self._disagree.add(key)
+            self._agree.discard(key)
+        elif excess <= self.agree_tol:
+            self._agree.add(key)
+
+    def representatives(self, ids) -> dict[int, int]:
+        """id -> the oldest (smallest) id of its group, for ``ids`` present now. Groups are
+        connected components of "agreed once, never disagreed" among present ids, kept only
+        if no two members disagree (otherwise the group falls back to its agreeing pairs
+        joined greedily from the oldest id)."""
+        ids = sorted(int(i) for i in ids)
+        present = set(ids)
+        rep = {i: i for i in ids}
+        members: dict[int, set[int]] = {i: {i} for i in ids}
+        for a, b in sorted(self._agree):
+            if a not in present or b not in present:
+                continue
+            ra, rb = rep[a], rep[b]
+            if ra == rb:
+                continue
+            if any(self._key(x, y) in self._disagree for x in members[ra] for y in members[rb]):
+                continue
+            keep, drop = (ra, rb) if ra < rb else (rb, ra)
+            for x in members[drop]:
+                rep[x] = keep
+            members[keep] |= members.pop(drop)
+        return rep
+
+
+def rigid_matrix(theta: float, t: np.ndarray) -> np.ndarray:
+    """(2, 3) matrix of the rigid backward motion q = R(theta) p + t."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s, t[0]], [s, c, t[1]]], np.float64)
+
+
+def union_excess(labels: np.ndarray, a: int, b: int, motion_a: np.ndarray, motion_b: np.ndarray,
+                 union: np.ndarray, cur: np.ndarray, prev: np.ndarray) -> float:
+    """Grey levels by which the (2, 3) ``union`` motion explains the worse of MotionBits
+    ``a`` and ``b`` (their pixels in ``labels``) worse than its own (2, 3) motion does."""
+    ys, xs = np.nonzero((labels == a) | (labels == b))
+    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
+    sub = labels[box]
+    e_union = photometric_residual(cur, prev, union, box)
+    worst = 0.0
+    for lab, own in ((a, motion_a), (b, motion_b)):
+        m = sub == lab
+        e_own = photometric_residual(cur, prev, own, box)
+        worst = max(worst, float(e_union[m].mean() - e_own[m].mean()))
+    return worst
+
+
+def stillness_visible(labels: np.ndarray, a: int, motion: np.ndarray, cur: np.ndarray) -> float:
+    """Grey levels by which the (2, 3) ``motion`` would change the image on MotionBit
+    ``a``'s pixels: mean |I - I pulled back by the motion|. Large on texture, ~0 on a flat
+    region or for motion along its stripes -- where standing still is not observable."""
+    ys, xs = np.nonzero(labels == a)
+    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
+    return float(photometric_residual(cur, cur, motion, box)[labels[box] == a].mean())

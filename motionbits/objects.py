@@ -1,0 +1,294 @@
+"""One object in one frame, shared by ``motionbits``, ``somprompt`` and ``vlm_adapters``.
+
+:class:`Instance` is what every package returns for an object: a MotionBit of the
+segmenter, a mark of a set-of-mark picture, a detection of the VLM -> YOLOE path. It
+converts to and from what the field already uses: label maps (0 = background, k > 0 =
+object k), COCO run-length encoding (``pycocotools``, extra ``coco``) and supervision's
+``sv.Detections`` (extra ``supervision``).
+
+This module imports only numpy (the extras are imported when their functions are called),
+so ``somprompt`` and ``vlm_adapters`` can use it without loading the segmenter.
+
+Example:
+    >>> import numpy as np
+    >>> labels = np.zeros((4, 6), np.int32); labels[1:3, 2:5] = 7
+    >>> [obj] = instances_from_labels(labels)
+    >>> obj.id, obj.bbox, obj.area, obj.centroid
+    (7, (2, 1, 5, 3), 6, (3.0, 1.5))
+    >>> bool((labels_from_instances([obj], labels.shape) == labels).all())
+    True
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field, replace
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+__all__ = [
+    "Instance",
+    "MissingDependencyError",
+    "require",
+    "check_label_map",
+    "instance_from_mask",
+    "instances_from_labels",
+    "labels_from_instances",
+    "encode_rle",
+    "decode_rle",
+    "to_supervision",
+    "from_supervision",
+]
+
+
+class MissingDependencyError(ImportError):
+    """An optional dependency is not installed; the message names the extra to install."""
+
+
+def require(module: str, extra: str, purpose: str = "") -> Any:
+    """Import ``module`` or raise :class:`MissingDependencyError` that names the extra.
+
+    Args:
+        module: dotted module name, e.g. ``"pycocotools.mask"``.
+        extra: the ``motionbits`` extra that provides it, e.g. ``"coco"``.
+        purpose: what needs it, for the message (e.g. ``"Qwen2_5_VLAdapter"``).
+    """
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:
+        who = f"{purpose} needs" if purpose else "This needs"
+        raise MissingDependencyError(
+            f"{who} the optional dependency '{module.split('.')[0]}', which is not installed "
+            f"or failed to import ({exc}). Install it with: pip install \"motionbits[{extra}]\""
+        ) from exc
+
+
+@dataclass(frozen=True)
+class Instance:
+    """One object in one frame (pixel coordinates of that frame).
+
+    Attributes:
+        id: object id (> 0): the label in a label map, stable across frames where the
+            producer tracks objects (MotionBits, marks).
+        bbox: ``(x0, y0, x1, y1)``, x1/y1 exclusive (width = x1 - x0).
+        area: pixels in the mask (the box area for a box-only detection).
+        centroid: ``(x, y)`` mean of the mask pixels (the box centre without a mask).
+        mask: (H, W) bool mask, or None (see :meth:`get_mask`).
+        rle: COCO RLE ``{"size": [H, W], "counts": str}``, or None.
+        score: detector confidence, or None.
+        name: class or phrase (e.g. the YOLOE text prompt), or None.
+        twist: MotionBits only: ``(omega rad/frame, v_x, v_y px/frame)`` spatial twist of
+            the motion from the previous frame about the image origin.
+        moving: MotionBits only: whether it moved between the previous frame and this one.
+        first_moved, last_moved: MotionBits only: frame indices of its first and latest
+            motion.
+
+    ``mask`` and ``rle`` are left out of ``==`` and ``repr``.
+    """
+
+    id: int
+    bbox: tuple[int, int, int, int]
+    area: int
+    centroid: tuple[float, float]
+    mask: np.ndarray | None = field(default=None, compare=False, repr=False)
+    rle: dict | None = field(default=None, compare=False, repr=False)
+    score: float | None = None
+    name: str | None = None
+    twist: tuple[float, float, float] | None = None
+    moving: bool | None = None
+    first_moved: int | None = None
+    last_moved: int | None = None
+
+    def get_mask(self) -> np.ndarray:
+        """(H, W) bool mask, from ``mask`` or decoded from ``rle``.
+
+        Raises:
+            ValueError: the instance holds neither (e.g. a MotionBit straight from
+                ``MotionBitsSegmenter.update``: use ``result.instances()``).
+        """
+        if self.mask is not None:
+            return self.mask
+        if self.rle is not None:
+            return decode_rle(self.rle)
+        raise ValueError(
+            f"instance {self.id} holds no mask and no RLE; build it with masks "
+            "(instances_from_labels(labels) or MotionBitsResult.instances())"
+        )
+
+    def with_rle(self) -> "Instance":
+        """This instance with its mask encoded as COCO RLE (and ``mask`` dropped)."""
+        return replace(self, rle=encode_rle(self.get_mask()), mask=None)
+
+
+def check_label_map(
+    labels: np.ndarray,
+    shape: tuple[int, int] | None = None,
+    *,
+    name: str = "labels",
+) -> np.ndarray:
+    """Validate an (H, W) label map and return it as an int64 array.
+
+    A label map holds 0 for background and k > 0 for object k. Boolean maps are
+    accepted as a single object with id 1; an (H, W, 1) map is squeezed.
+
+    Args:
+        labels: (H, W) array of non-negative integers (any integer dtype) or bool.
+        shape: (H, W) that the map must have (the frame it belongs to), or None.
+        name: what to call the argument in error messages.
+
+    Returns:
+        (H, W) int64 array (the input itself when it already is one).
+
+    Raises:
+        TypeError: not a numpy array, or not an integer/bool dtype.
+        ValueError: not 2-D, negative ids, or a size that differs from ``shape``.
+    """
+    if not isinstance(labels, np.ndarray):
+        raise TypeError(
+            f"{name} must be an (H, W) numpy integer array (0 = background, k > 0 = object k), "
+            f"got {type(labels).__name__}"
+        )
+    if labels.dtype == np.bool_:
+        labels = labels.astype(np.int64)
+    elif not np.issubdtype(labels.dtype, np.integer):
+        raise TypeError(
+            f"{name} must have an integer dtype (0 = background, k > 0 = object k), got "
+            f"{labels.dtype}; if it holds whole numbers, use labels.astype(np.int32)"
+        )
+    if labels.ndim == 3 and labels.shape[2] == 1:
+        labels = labels[..., 0]
+    if labels.ndim != 2:
+        raise ValueError(f"{name} must be an (H, W) label map, got shape {labels.shape}")
+    if labels.size and labels.min() < 0:
+        raise ValueError(f"{name} holds negative ids (min {labels.min()}); ids must be >= 0")
+    if shape is not None and tuple(labels.shape) != tuple(shape[:2]):
+        raise ValueError(
+            f"{name} has size {labels.shape[1]}x{labels.shape[0]} (W x H) but the frame is "
+            f"{shape[1]}x{shape[0]}; resize the label map with nearest-neighbour "
+            "interpolation (cv2.INTER_NEAREST) to the frame size"
+        )
+    return labels if labels.dtype == np.int64 else labels.astype(np.int64)
+
+
+def instance_from_mask(mask: np.ndarray, id: int, *, rle: bool = False, **fields: Any) -> Instance:
+    """:class:`Instance` of one (H, W) bool mask: box, area and centroid measured on it.
+
+    Args:
+        mask: (H, W) bool (an empty mask gives box (0, 0, 0, 0), area 0, centroid NaN).
+        id: the object's id.
+        rle: store the mask as COCO RLE instead of the array (extra ``coco``).
+        **fields: other :class:`Instance` fields (``score``, ``name``, ``twist``, ...).
+    """
+    m = np.asarray(mask, dtype=bool)
+    if m.ndim != 2:
+        raise ValueError(f"mask must be (H, W), got shape {m.shape}")
+    ys, xs = np.nonzero(m)
+    if xs.size:
+        bbox = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+        centroid = (float(xs.mean()), float(ys.mean()))
+    else:
+        bbox, centroid = (0, 0, 0, 0), (float("nan"), float("nan"))
+    return Instance(id=int(id), bbox=bbox, area=int(xs.size), centroid=centroid,
+                    mask=None if rle else m, rle=encode_rle(m) if rle else None, **fields)
+
+
+def instances_from_labels(labels: np.ndarray, *, rle: bool = False) -> list[Instance]:
+    """One :class:`Instance` (with its mask, or its COCO RLE when ``rle``) per id > 0 of an
+    (H, W) integer label map, ids ascending."""
+    lm = check_label_map(labels)
+    return [instance_from_mask(lm == i, int(i), rle=rle) for i in np.unique(lm) if i > 0]
+
+
+def labels_from_instances(objects: Iterable[Instance], shape: tuple[int, int]) -> np.ndarray:
+    """(H, W) int32 label map of ``objects`` (later objects drawn over earlier ones)."""
+    out = np.zeros(shape[:2], np.int32)
+    for obj in objects:
+        m = obj.get_mask()
+        if m.shape != out.shape:
+            raise ValueError(f"instance {obj.id} has a {m.shape} mask; the label map is {out.shape}")
+        out[m] = obj.id
+    return out
+
+
+def encode_rle(mask: np.ndarray) -> dict:
+    """COCO RLE of an (H, W) bool mask: ``{"size": [H, W], "counts": str}`` (JSON-ready)."""
+    mask_util = require("pycocotools.mask", "coco")
+    m = np.asarray(mask)
+    if m.ndim != 2:
+        raise ValueError(f"mask must be (H, W), got shape {m.shape}")
+    rle = mask_util.encode(np.asfortranarray(m.astype(np.uint8)))
+    return {"size": [int(s) for s in rle["size"]], "counts": rle["counts"].decode("ascii")}
+
+
+def decode_rle(rle: dict) -> np.ndarray:
+    """(H, W) bool mask of a COCO RLE (compressed ``counts`` as str or bytes)."""
+    mask_util = require("pycocotools.mask", "coco")
+    if not isinstance(rle, dict) or "size" not in rle or "counts" not in rle:
+        raise ValueError("rle must be a dict with 'size' [H, W] and 'counts' (COCO run-length encoding)")
+    counts = rle["counts"]
+    if isinstance(counts, list):  # uncompressed RLE
+        coded = mask_util.frPyObjects(rle, *rle["size"])
+    else:
+        coded = {"size": list(rle["size"]), "counts": counts.encode("ascii") if isinstance(counts, str) else counts}
+    return mask_util.decode(coded).astype(bool)
+
+
+def to_supervision(objects: Sequence[Instance]) -> Any:
+    """``sv.Detections`` of ``objects`` (extra ``supervision``).
+
+    ``id`` -> ``tracker_id``; ``bbox`` -> ``xyxy``; masks -> ``mask`` (when every object
+    has one); ``score`` -> ``confidence`` and ``name`` -> ``data["class_name"]`` (when
+    every object has one); MotionBits' ``twist`` -> ``data["twist"]`` (N, 3). There is
+    no ``class_id``: colour supervision's annotators by id with
+    ``color_lookup=sv.ColorLookup.TRACK``.
+    """
+    sv = require("supervision", "supervision")
+    objects = list(objects)
+    if not objects:
+        return sv.Detections.empty()
+
+    def has(attr: str) -> bool:
+        return all(getattr(o, attr) is not None for o in objects)
+
+    data: dict[str, np.ndarray] = {}
+    if has("name"):
+        data["class_name"] = np.array([o.name for o in objects])
+    if has("twist"):
+        data["twist"] = np.array([o.twist for o in objects], np.float64)
+    masks = None
+    if all(o.mask is not None or o.rle is not None for o in objects):
+        masks = np.stack([o.get_mask() for o in objects])
+    return sv.Detections(
+        xyxy=np.array([o.bbox for o in objects], np.float32),
+        mask=masks,
+        confidence=np.array([o.score for o in objects], np.float32) if has("score") else None,
+        tracker_id=np.array([o.id for o in objects], int),
+        data=data,
+    )
+
+
+def from_supervision(detections: Any) -> list[Instance]:
+    """:class:`Instance` list of an ``sv.Detections``: ids from ``tracker_id`` (else
+    1..N); box, area and centroid measured on the masks when present, else from ``xyxy``
+    (rounded outwards; area = box area); ``confidence``, ``data["class_name"]`` and
+    ``data["twist"]`` when present."""
+    n = len(detections)
+    ids = detections.tracker_id if detections.tracker_id is not None else np.arange(1, n + 1)
+    names = (detections.data or {}).get("class_name")
+    twists = (detections.data or {}).get("twist")
+    out = []
+    for i in range(n):
+        fields = {
+            "score": None if detections.confidence is None else float(detections.confidence[i]),
+            "name": None if names is None else str(names[i]),
+            "twist": None if twists is None else tuple(float(v) for v in twists[i]),
+        }
+        if detections.mask is not None:
+            out.append(instance_from_mask(detections.mask[i], int(ids[i]), **fields))
+            continue
+        x0, y0, x1, y1 = (float(v) for v in detections.xyxy[i])
+        box = (int(np.floor(x0)), int(np.floor(y0)), int(np.ceil(x1)), int(np.ceil(y1)))
+        out.append(Instance(id=int(ids[i]), bbox=box, area=(box[2] - box[0]) * (box[3] - box[1]),
+                            centroid=((x0 + x1) / 2, (y0 + y1) / 2), **fields))
+    return out
