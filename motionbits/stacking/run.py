@@ -9,17 +9,11 @@ from typing import Callable
 import numpy as np
 
 from motionbits.stacking.trial import FAILURES, TrialConfig, TrialResult, push_scene, run_trial
+from motionbits.video_writer import H264Writer
 
 __all__ = ["GT", "format_table", "run_stacking", "summarise"]
 
 GT = "gt"  #: method name of the ground-truth masks (the controller's ceiling)
-
-
-def _writer(path: Path, fps: float, size: tuple[int, int]):
-    import cv2
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
 
 
 def run_stacking(methods: list[str], trials: int, seed: int, *, config: TrialConfig = TrialConfig(),
@@ -32,7 +26,7 @@ def run_stacking(methods: list[str], trials: int, seed: int, *, config: TrialCon
         trials: number of trials.
         seed: selects the scenes and pushes.
         config: trial parameters.
-        video_dir: if given, ``<dir>/<method>_trial<i>.mp4`` of every trial (MPEG-4).
+        video_dir: if given, ``<dir>/<method>_trial<i>.mp4`` of every trial (H.264).
         progress: called with one line per finished trial (None: silent).
 
     Returns:
@@ -54,19 +48,11 @@ def run_stacking(methods: list[str], trials: int, seed: int, *, config: TrialCon
             progress(f"trial {i}: push clip {len(pushed.frames)} frames, {pushed.pushed}/5 objects "
                      f"moved, {pushed.seconds:.1f} s")
         for m in methods:
-            writer = None
-            video = None
-            if video_dir is not None:
-                writer = _writer(Path(video_dir) / f"{m}_trial{i}.mp4", 1.0 / config.frame_dt,
-                                 (config.width, config.height))
-
-                def video(frame: np.ndarray, w=writer) -> None:
-                    w.write(np.ascontiguousarray(frame[..., ::-1]))
-            try:
-                r = run_trial(m, fns[m], pushed, config, video=video, gt=(m == GT))
-            finally:
-                if writer is not None:
-                    writer.release()
+            if video_dir is None:
+                r = run_trial(m, fns[m], pushed, config, gt=(m == GT))
+            else:
+                with H264Writer(Path(video_dir) / f"{m}_trial{i}.mp4", 1.0 / config.frame_dt) as w:
+                    r = run_trial(m, fns[m], pushed, config, video=w.write, gt=(m == GT))
             results[m].append(r)
             if progress:
                 state = "success" if r.success else f"failed ({r.failure})"
