@@ -10,7 +10,12 @@ import pytest
 
 from motionbits.baselines import make_method
 from motionbits.cli import main
-from motionbits.stacking.perception import HeightMap, PinholeCamera, finger_clearance, world_grasp
+from motionbits.stacking.perception import (
+    HeightMap,
+    PinholeCamera,
+    finger_clearance,
+    world_grasp,
+)
 from motionbits.stacking.run import format_table, summarise
 from motionbits.stacking.trial import TrialResult
 

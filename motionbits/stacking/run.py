@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
-from motionbits.stacking.trial import FAILURES, TrialConfig, TrialResult, push_scene, run_trial
+from motionbits.stacking.trial import (
+    FAILURES,
+    TrialConfig,
+    TrialResult,
+    push_scene,
+    run_trial,
+)
 from motionbits.video_writer import H264Writer
 
 __all__ = ["GT", "format_table", "run_stacking", "summarise"]

@@ -20,7 +20,7 @@ import numpy as np
 
 from motionbits.synth.mujoco_mjcf import MJCFScene, fmt
 
-__all__ = ["CAMERA", "CameraSpec", "StackScene", "build_scene", "N_OBJECTS", "SHAPES"]
+__all__ = ["CAMERA", "N_OBJECTS", "SHAPES", "CameraSpec", "StackScene", "build_scene"]
 
 N_OBJECTS = 5
 #: Polyominoes (cell coordinates) the composites are drawn from.

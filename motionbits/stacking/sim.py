@@ -7,7 +7,7 @@ while a recorder is set, renders one RGB frame every ``frame_dt`` simulated seco
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

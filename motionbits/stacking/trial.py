@@ -20,13 +20,24 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
-from motionbits.stacking.perception import HeightMap, WorldGrasp, finger_clearance, world_grasp
-from motionbits.stacking.scene import FINGER_MAX, N_OBJECTS, SHAPES, StackScene, build_scene
+from motionbits.stacking.perception import (
+    HeightMap,
+    WorldGrasp,
+    finger_clearance,
+    world_grasp,
+)
+from motionbits.stacking.scene import (
+    FINGER_MAX,
+    N_OBJECTS,
+    SHAPES,
+    StackScene,
+    build_scene,
+)
 from motionbits.stacking.sim import StackSim
 
 __all__ = ["FAILURES", "PushedScene", "TrialConfig", "TrialResult", "push_scene", "run_trial",
