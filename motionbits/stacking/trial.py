@@ -2,14 +2,15 @@
 
 1. A seeded scene (:func:`motionbits.stacking.scene.build_scene`) settles.
 2. Interaction: the gripper, fingers closed, gives each composite one short push in a
-   random direction (random order), then leaves the camera's view. Every object moves,
+   random direction away from the arrangement's centre (random order), then leaves the
+   camera's view. Every object moves,
    so a motion method *can* see all five. The camera records at ``frame_dt``.
 3. The method under test maps the clip to a label map of its last frame.
 4. Greedy controller: masks largest (pixel area) first; each mask is lifted to 3-D with
    the depth render and its bird's-eye centroid, principal axes and width give the grasp
    (:func:`motionbits.stacking.perception.world_grasp`); the hand descends, closes,
    lifts, carries the object to the tower, lowers it onto the tower top (measured in the
-   depth render) and opens. It stops once five objects are stacked or the masks run out.
+   depth render) and relaxes the fingers. It stops once five objects are stacked or the masks run out.
 5. The simulator referees every step. Failure reasons: ``grasp`` (nothing lifted, or the
    object slipped out on the way), ``stack`` (the placed object did not come to rest on
    the tower upright, or the tower moved), ``masks`` (masks ran out before five objects
