@@ -46,10 +46,6 @@ __all__ = [
     "MotionBitsSegmenter",
     "iter_frames",
     "segment_video",
-    # top-down grasp proposals from masks (Supplement B; numpy only)
-    "GraspProposal",
-    "grasp_from_mask",
-    "grasp_proposals",
     # the object type and helpers shared with somprompt and vlm_adapters
     "Instance",
     "MissingDependencyError",
@@ -63,6 +59,10 @@ __all__ = [
     "labels_from_instances",
     "sample_frame_indices",
     "to_supervision",
+    # top-down grasp proposals from masks (paper Supplement B; loaded on first use)
+    "GraspProposal",
+    "grasp_from_mask",
+    "grasp_proposals",
 ]
 
 
@@ -81,7 +81,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs (names are in __all__)
     from motionbits.config import MotionBitsConfig  # noqa: F401
-    from motionbits.grasp import GraspProposal, grasp_from_mask, grasp_proposals  # noqa: F401
     from motionbits.segmenter import (  # noqa: F401
         MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video)
+    from motionbits.grasp import GraspProposal, grasp_from_mask, grasp_proposals  # noqa: F401
     from motionbits.video import iter_frames  # noqa: F401

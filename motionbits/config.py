@@ -95,6 +95,9 @@ class MotionBitsConfig:
     # some frame), and different bodies for good once it is worse by merge_disagree
     merge_agree: float = 1.5
     merge_disagree: float = 6.0
+    # ours (motionbits/retirement.py): a MotionBit is retired when the static world explains
+    # its pixels better, by this many grey levels, than its own motion since its birth
+    retire_margin: float = 5.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
@@ -131,6 +134,7 @@ class MotionBitsConfig:
             "match_iou": 0.0 <= self.match_iou <= 1.0,
             "merge_agree": self.merge_agree >= 0,
             "merge_disagree": self.merge_disagree >= self.merge_agree,
+            "retire_margin": self.retire_margin >= 0,
         }
         bad = [name for name, ok in checks.items() if not ok]
         if bad:

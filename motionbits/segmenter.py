@@ -35,7 +35,8 @@ from motionbits.mcl import markov_cluster_coarse, normalize_rows
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.objects import Instance, encode_rle
 from motionbits.propagation import grid_seeds
-from motionbits.twists import fit_local_motions, se2_log
+from motionbits.retirement import Origin, moved_evidence
+from motionbits.twists import fit_local_motions, refine_rigid_motion, se2_log
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
@@ -133,6 +134,7 @@ class MotionBitsSegmenter:
         self._past_max: np.ndarray | None = None  # (n, k) largest earlier edge weights
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
+        self._origins: dict[int, Origin] = {}  # id -> its birth frame and motion since
         self._tentative: set[int] = set()  # ids born at the last frame, not yet confirmed
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._first_moved: dict[int, int] = {}
@@ -232,6 +234,7 @@ class MotionBitsSegmenter:
                                    nan=1e3, posinf=1e3)
             # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), _gray(self._prev)
+            raw_prev_g = prev_g
             pulled = pull_back(prev_g, flow_back)
             gradient = gradient_magnitude(cur_g)
             # a carried label holds a pixel only where the flow is consistent both ways and
@@ -254,7 +257,7 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # camera motion compensation: motion is measured against the dominant motion
             # (flow_m, prev_m); label maps are still carried with the true flow
-            flow_m, prev_m, back_pts = flow_back, self._prev, seen_pts
+            flow_m, prev_m, back_pts, cam = flow_back, self._prev, seen_pts, None
             if cfg.camera_support < 1.0:
                 cam = fit_camera_motion(pts, seen_pts, reliability > 0.5,
                                         support=cfg.camera_support,
@@ -320,7 +323,8 @@ class MotionBitsSegmenter:
             evidence = cache(lambda: motion_gain(cur_g, prev_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, thetas, trans = self._identify(
-                node_cluster, motions.displacement, prior_nodes, pts, back_pts, reliability,
+                node_cluster, motions.displacement, prior[ix[:, 1], ix[:, 0]], pts, back_pts,
+                reliability,
                 evidence)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
@@ -334,6 +338,13 @@ class MotionBitsSegmenter:
 
         with self._stage("merging"):
             moving = self._record_motion(node_ids, ids, thetas, trans, pts)
+            # the twists reported and merged: each moving MotionBit's motion refined on its
+            # own pixels (flow reads rotations low)
+            inner = cv2.erode(labels.astype(np.float32), np.ones((5, 5), np.uint8))
+            for k, lab in enumerate(ids):
+                if lab in moving:
+                    thetas[k], trans[k] = refine_rigid_motion(cur_g, prev_g, inner == lab,
+                                                              thetas[k], trans[k])
             own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
             reach = int(np.ceil(max(grid.cell)))
             # born out of pixels that were in view and had never been in a MotionBit
@@ -362,6 +373,7 @@ class MotionBitsSegmenter:
                                       union, cur_g, prev_g)
                 if (a in own and b in own) or excess > cfg.merge_disagree:
                     self._groups.observe(a, b, excess)
+            labels = self._retire(labels, ids, thetas, trans, first_new, cam, raw_prev_g, cur_g)
             rep = self._groups.representatives(np.unique(labels[labels > 0]))
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown
@@ -467,13 +479,14 @@ class MotionBitsSegmenter:
         ids = []
         newborn = set()
         for c in range(1, len(big) + 1):
-            moves = np.median(displacement[cluster == c]) > cfg.move_threshold
+            sel = cluster == c
+            moves = np.median(displacement[sel]) > cfg.move_threshold
             if c in matched:
                 i = matched[c]
-                # a MotionBit born last frame stands only if it moves again now
-                ids.append(i if i not in self._tentative or moves else 0)
-            elif (has_interior[c] and moves
-                  and np.mean(evidence()[cluster == c]) > cfg.motion_evidence):
+                # a MotionBit born last frame stands only if it visibly moves again now
+                ids.append(i if i not in self._tentative or (
+                    moves and np.mean(evidence()[sel]) > cfg.motion_evidence) else 0)
+            elif has_interior[c] and moves and np.mean(evidence()[sel]) > cfg.motion_evidence:
                 ids.append(self._next_id)
                 newborn.add(self._next_id)
                 self._next_id += 1
@@ -486,6 +499,29 @@ class MotionBitsSegmenter:
         thetas, trans = fit_cluster_motions(pts, back_pts, reliability, node_ids, ids,
                                             cfg.ransac_threshold)
         return node_ids, ids, thetas, trans
+
+    def _retire(self, labels, ids, thetas, trans, first_new, cam, prev_gray, cur_gray):
+        """Advance every MotionBit's origin by this frame's motions and retire those whose
+        pixels the static world explains better than their own accumulated motion
+        (:mod:`motionbits.retirement`); returns ``labels`` without them."""
+        world = np.eye(3) if cam is None else cam
+        own = {int(i): world @ np.vstack([rigid_matrix(th, t), [0.0, 0.0, 1.0]])
+               for i, th, t in zip(ids, thetas, trans)}
+        present = set(np.unique(labels[labels > 0]).tolist())
+        self._origins = {i: o for i, o in self._origins.items() if i in present}
+        out = labels
+        for i in sorted(present):
+            if i >= first_new:
+                self._origins[i] = Origin(prev_gray, np.eye(3), np.eye(3))
+            origin = self._origins.get(i)
+            if origin is None:
+                continue
+            origin.advance(own.get(i, world), world)
+            gain = moved_evidence(origin, cur_gray, labels == i, 2.0)
+            if gain < -self.config.retire_margin:
+                out = np.where(out == i, 0, out)
+                del self._origins[i]
+        return out
 
     def _record_motion(self, node_ids, ids, thetas, trans, pts) -> set[int]:
         """Ids whose fitted motion moves their nodes by more than ``move_threshold`` (mean)

@@ -16,7 +16,7 @@ from itertools import combinations
 
 import numpy as np
 
-__all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp"]
+__all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp", "refine_rigid_motion"]
 
 
 @dataclass(frozen=True)
@@ -177,3 +177,48 @@ def _fit_neighbourhoods(points, back_points, idx, weights, inlier_threshold, dty
                            fit_w)
 
     return ang, trans, inliers
+
+
+def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.ndarray,
+                        theta: float, t: np.ndarray, *, iterations: int = 30,
+                        margin: int = 16) -> tuple[float, np.ndarray]:
+    """Refine a rigid backward motion q = R(theta) p + t of the pixels ``mask`` on the images
+    themselves (OpenCV's ECC alignment, Euclidean model, started from the given motion).
+
+    Optical flow is regularised: it pulls a body's rotation toward its surroundings' (DIS
+    reads the demo's rotations 15-20% low). Aligning the body's own pixels removes that
+    bias. Falls back to the given motion where ECC does not converge.
+
+    Args:
+        cur_gray, prev_gray: (H, W) float32 grey frames.
+        mask: (H, W) bool pixels of the body in the current frame.
+        theta, t: the starting backward motion (radians; (2,) px).
+        iterations: ECC iteration cap.
+        margin: px of context around the mask's box (the motion must stay inside it).
+
+    Returns:
+        theta, t (2,) of the refined backward motion.
+    """
+    import cv2  # noqa: PLC0415 (cv2 is a core dependency; kept local to this one function)
+
+    ys, xs = np.nonzero(mask)
+    if len(xs) < 16:
+        return theta, np.asarray(t, np.float64)
+    h, w = mask.shape
+    y0, y1 = max(ys.min() - margin, 0), min(ys.max() + margin + 1, h)
+    x0, x1 = max(xs.min() - margin, 0), min(xs.max() + margin + 1, w)
+    c, s = np.cos(theta), np.sin(theta)
+    # the same motion in crop coordinates: q' = R (p' + o) + t - o
+    off = np.array([x0, y0], np.float64)
+    tc = np.array([[c, -s], [s, c]]) @ off + np.asarray(t, np.float64) - off
+    warp = np.array([[c, -s, tc[0]], [s, c, tc[1]]], np.float32)
+    try:
+        _, warp = cv2.findTransformECC(
+            cur_gray[y0:y1, x0:x1], prev_gray[y0:y1, x0:x1], warp, cv2.MOTION_EUCLIDEAN,
+            (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, iterations, 1e-5),
+            mask[y0:y1, x0:x1].astype(np.uint8), 1)
+    except cv2.error:
+        return theta, np.asarray(t, np.float64)
+    th = float(np.arctan2(warp[1, 0], warp[0, 0]))
+    r = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    return th, warp[:, 2].astype(np.float64) + off - r @ off

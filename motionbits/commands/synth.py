@@ -18,14 +18,25 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
             "Needs: pip install motionbits[sim]."
         ),
     )
-    p.add_argument("--track", choices=("robot", "hand"), action="append", required=True,
-                   help="track to generate (repeat for both)")
+    p.add_argument("--track", choices=("robot", "hand", "pickplace"), action="append",
+                   required=True,
+                   help="track to generate (repeat for several): robot, hand (pushes), pickplace "
+                        "(harder: natural textures, shadows, an articulated hand or gripper "
+                        "carries a block across the table while other bodies move)")
     p.add_argument("--scenes", type=int, default=40, metavar="N", help="scenes per track (40)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (0)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (DIR/<track>/...)")
     p.add_argument("--size", default="640x480", metavar="WxH", help="frame size (640x480)")
     p.add_argument("--frames", type=int, default=None, metavar="T",
                    help="frames per clip (default: random 12-16 per scene)")
+    p.add_argument("--camera", default="static",
+                   choices=("static", "pan", "orbit", "shake", "moving"),
+                   help="camera motion (static): pan turns in place, orbit circles the table "
+                        "(parallax), shake is hand-held jitter, moving draws one of the three "
+                        "per scene; a moving camera writes to DIR/<track>-<camera>/")
+    p.add_argument("--flow", action="store_true",
+                   help="also write the exact optical flow of every frame pair, both "
+                        "directions, with visibility masks (flow/NNNNN.npz; see docs/evaluation.md)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
     return p
@@ -51,5 +62,6 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--frames must be at least 2")
     for track in dict.fromkeys(args.track):
         generate_track(track, args.scenes, args.seed, args.out, width=w, height=h,
-                       n_frames=args.frames, progress=not args.quiet)
+                       n_frames=args.frames, progress=not args.quiet, camera=args.camera,
+                       flow=args.flow)
     return 0
