@@ -22,6 +22,7 @@ COMMAND_MODULES = (
     "motionbits.commands.synth",
     "motionbits.commands.benchmark",
     "motionbits.commands.scenes",
+    "motionbits.commands.stack",
 )
 
 #: Failures that are the input's or the environment's, not a bug: reported in one line.
