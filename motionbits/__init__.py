@@ -27,15 +27,23 @@ from motionbits.objects import (
 __version__ = "0.1.0"
 
 _LAZY: dict[str, str] = {
+    "InputError": "motionbits.errors",
     "MotionBitsConfig": "motionbits.config",
     "MotionBit": "motionbits.segmenter",
     "MotionBitsResult": "motionbits.segmenter",
     "MotionBitsSegmenter": "motionbits.segmenter",
     "segment_video": "motionbits.segmenter",
     "iter_frames": "motionbits.video",
+    "GraspProposal": "motionbits.grasp",
+    "grasp_from_mask": "motionbits.grasp",
+    "grasp_proposals": "motionbits.grasp",
+    # learned options from local weights (torch etc. imported only when they are built)
+    "Sam2Refiner": "motionbits.refine_sam2",
+    "RAFTFlow": "motionbits.flow_raft",
 }
 
 __all__ = [
+    "InputError",  # the command line's one-line error
     # the segmenter (loaded on first use)
     "MotionBit",
     "MotionBitsConfig",
@@ -43,6 +51,9 @@ __all__ = [
     "MotionBitsSegmenter",
     "iter_frames",
     "segment_video",
+    # learned options: SAM2 refinement, RAFT flow (loaded on first use)
+    "RAFTFlow",
+    "Sam2Refiner",
     # the object type and helpers shared with somprompt and vlm_adapters
     "Instance",
     "MissingDependencyError",
@@ -56,6 +67,10 @@ __all__ = [
     "labels_from_instances",
     "sample_frame_indices",
     "to_supervision",
+    # top-down grasp proposals from masks (paper Supplement B; loaded on first use)
+    "GraspProposal",
+    "grasp_from_mask",
+    "grasp_proposals",
 ]
 
 
@@ -76,4 +91,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs (names are in
     from motionbits.config import MotionBitsConfig  # noqa: F401
     from motionbits.segmenter import (  # noqa: F401
         MotionBit, MotionBitsResult, MotionBitsSegmenter, segment_video)
+    from motionbits.grasp import GraspProposal, grasp_from_mask, grasp_proposals  # noqa: F401
     from motionbits.video import iter_frames  # noqa: F401
+    from motionbits.flow_raft import RAFTFlow  # noqa: F401
+    from motionbits.refine_sam2 import Sam2Refiner  # noqa: F401

@@ -8,13 +8,69 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
+from numbers import Integral, Real
 
 __all__ = ["BACKENDS", "MotionBitsConfig"]
 
 #: Accepted values of ``MotionBitsConfig.backend``.
 BACKENDS = ("numpy", "torch", "torch:cpu", "torch:cuda", "torch:cuda:N")
 _BACKEND_RE = re.compile(r"numpy|torch(:cpu|:cuda(:\d+)?)?")
+
+# annotation -> (what the error message calls it, test); bool is no int here, an int is a float
+_FIELD_TYPES = {
+    "bool": ("True or False", lambda v: isinstance(v, bool)),
+    "int": ("an integer", lambda v: isinstance(v, Integral) and not isinstance(v, bool)),
+    "float": ("a number", lambda v: isinstance(v, Real) and not isinstance(v, bool)),
+    "str": ("a string", lambda v: isinstance(v, str)),
+}
+
+#: Allowed values of the numeric fields, as intervals ("inf" = no upper bound).
+_RANGES = {
+    "n_nodes": "[16, 1000000]",
+    "k_neighbors": "[1, 24]",
+    "max_side": "[32, 16384]",
+    "seed_fraction": "(0, 1]",
+    "propagation_iters": "[1, inf)",
+    "reseed_every": "[1, inf)",
+    "mcl_expansion": "[2, inf)",
+    "mcl_inflation": "(1, inf)",
+    "mcl_max_iters": "[1, inf)",
+    "mcl_stable_iters": "[1, inf)",
+    "mcl_prune": "[0, inf)",
+    "mcl_max_items": "[16, inf)",
+    "ransac_threshold": "(0, inf)",
+    "fb_sigma": "(0, inf)",
+    "flow_noise": "(0, inf)",
+    "move_threshold": "(0, inf)",
+    "motion_evidence": "[0, inf)",
+    "carry_tolerance": "(0, inf)",
+    "carry_gradient": "[0, inf)",
+    "camera_support": "(0, 1]",
+    "camera_threshold": "(0, inf)",
+    "camera_min_shift": "[0, inf)",
+    "min_cluster_nodes": "[1, inf)",
+    "prior_bonus": "[0, inf)",
+    "photo_weight": "[0, inf)",
+    "flow_texture": "(0, inf)",
+    "pixel_evidence": "[0, inf)",
+    "match_iou": "[0, 1]",
+    "merge_agree": "[0, inf)",
+    "merge_disagree": "[0, inf)",
+    "retire_margin": "[0, inf)",
+    "refine_min_iou": "[0, 1]",
+    "refine_max_outside": "[0, 1]",
+}
+
+
+def _in_range(value: float, interval: str) -> bool:
+    """Whether ``value`` lies in an interval written like ``"(0, 1]"`` or ``"[16, inf)"``."""
+    lo, hi = (float(v) for v in interval[1:-1].split(","))
+    if value != value:  # NaN is in no interval
+        return False
+    above = value > lo if interval[0] == "(" else value >= lo
+    below = value < hi if interval[-1] == ")" else value <= hi
+    return above and below
 
 
 @dataclass(frozen=True)
@@ -28,7 +84,9 @@ class MotionBitsConfig:
     # --- graph construction (paper Sec. 5.1, Supp. A) ---
     n_nodes: int = 10_000  # Supp. A: sqrt(n) x sqrt(n) = 100 x 100 grid
     k_neighbors: int = 5  # Supp. A: k = 5 nearest grid neighbours
-    max_side: int = 640  # Supp. A: parameters derived for 480x640 / 640x480 video
+    # Supp. A: parameters derived for 480x640 / 640x480 video. Longest side of the working
+    # resolution; smaller inputs are upsampled only up to 640, never beyond
+    max_side: int = 640
 
     # --- soft label propagation (paper Sec. 5.2, Supp. A) ---
     seed_fraction: float = 0.04  # Supp. A: C = 0.04 n seeds (C = 400 at n = 10,000)
@@ -71,7 +129,7 @@ class MotionBitsConfig:
     # tolerated on texture). Uncovered background fails it and does not inherit a label.
     carry_tolerance: float = 12.0
     carry_gradient: float = 1.0
-    # ours: camera motion compensation (motionbits/camera.py). A similarity transform
+    # ours: camera motion compensation (motionbits/camera.py). A homography
     # fitted to the node flow by RANSAC is taken as the camera's motion when at least
     # this fraction of the reliable nodes are its inliers (1.0 = off) ...
     camera_support: float = 0.5
@@ -95,6 +153,18 @@ class MotionBitsConfig:
     # some frame), and different bodies for good once it is worse by merge_disagree
     merge_agree: float = 1.5
     merge_disagree: float = 6.0
+    # ours (motionbits/retirement.py): a MotionBit is retired when the static world explains
+    # its pixels better, by this many grey levels, than its own motion since its birth
+    retire_margin: float = 5.0
+
+    # --- optional learned refinement (paper Sec. 5.3: SAM2 prompted per MotionBit) ---
+    # "none" (default) or "sam2": each frame's masks are refined by SAM2 from `sam2_path`
+    # (motionbits/refine_sam2.py; needs torch + transformers, imported only then)
+    refine: str = "none"
+    sam2_path: str = ""  # SAM2 checkpoint folder (transformers format) or a reachable hub id
+    refine_min_iou: float = 0.5  # ours: a refined mask must overlap its motion mask this much
+    # ours: ... and have at most this fraction on static background away from the motion mask
+    refine_max_outside: float = 0.1
 
     # --- temporal window (ours; the paper's constraints span the whole video) ---
     # ours: None = the temporal constraints (label history, past edge maxima) cover every
@@ -107,43 +177,28 @@ class MotionBitsConfig:
         if not isinstance(self.backend, str) or not _BACKEND_RE.fullmatch(self.backend):
             raise ValueError(f"invalid MotionBitsConfig backend {self.backend!r}; choose one of "
                              + ", ".join(repr(b) for b in BACKENDS) + " (N = GPU index)")
-        checks = {
-            "n_nodes": self.n_nodes >= 16,
-            "k_neighbors": 1 <= self.k_neighbors <= 24,
-            "max_side": self.max_side >= 32,
-            "seed_fraction": 0.0 < self.seed_fraction <= 1.0,
-            "propagation_iters": self.propagation_iters >= 1,
-            "reseed_every": self.reseed_every >= 1,
-            "mcl_expansion": self.mcl_expansion >= 2,
-            "mcl_inflation": self.mcl_inflation > 1.0,
-            "mcl_max_iters": self.mcl_max_iters >= 1,
-            "mcl_stable_iters": self.mcl_stable_iters >= 1,
-            "mcl_prune": self.mcl_prune >= 0.0,
-            "mcl_max_items": self.mcl_max_items >= 16,
-            "ransac_threshold": self.ransac_threshold > 0,
-            "fb_sigma": self.fb_sigma > 0,
-            "flow_noise": self.flow_noise > 0,
-            "move_threshold": self.move_threshold > 0,
-            "motion_evidence": self.motion_evidence >= 0,
-            "carry_tolerance": self.carry_tolerance > 0,
-            "carry_gradient": self.carry_gradient >= 0,
-            "camera_support": 0.0 < self.camera_support <= 1.0,
-            "camera_threshold": self.camera_threshold > 0,
-            "camera_min_shift": self.camera_min_shift >= 0,
-            "min_cluster_nodes": self.min_cluster_nodes >= 1,
-            "prior_bonus": self.prior_bonus >= 0,
-            "photo_weight": self.photo_weight >= 0,
-            "flow_texture": self.flow_texture > 0,
-            "pixel_evidence": self.pixel_evidence >= 0,
-            "match_iou": 0.0 <= self.match_iou <= 1.0,
-            "merge_agree": self.merge_agree >= 0,
-            "merge_disagree": self.merge_disagree >= self.merge_agree,
-            "window": self.window is None or (isinstance(self.window, int) and self.window >= 2),
-        }
-        bad = [name for name, ok in checks.items() if not ok]
-        if bad:
-            values = ", ".join(f"{name}={getattr(self, name)!r}" for name in bad)
-            raise ValueError(f"invalid MotionBitsConfig value(s): {values}")
+        # Generic over the fields, so a new field is checked without touching this method:
+        # its type comes from its annotation, its range (if any) from ``_RANGES``.
+        for f in fields(self):
+            value = getattr(self, f.name)
+            kind = _FIELD_TYPES.get(f.type if isinstance(f.type, str) else f.type.__name__)
+            if kind is not None and not kind[1](value):
+                raise TypeError(f"MotionBitsConfig.{f.name} must be {kind[0]}, got "
+                                f"{type(value).__name__} {value!r}")
+            if f.name in _RANGES and not _in_range(value, _RANGES[f.name]):
+                raise ValueError(f"invalid MotionBitsConfig value {f.name}={value!r}: must be in "
+                                 f"{_RANGES[f.name]}")
+        if self.merge_disagree < self.merge_agree:
+            raise ValueError(f"MotionBitsConfig.merge_disagree ({self.merge_disagree!r}) must be "
+                             f">= merge_agree ({self.merge_agree!r})")
+        if self.window is not None and (isinstance(self.window, bool)
+                                        or not isinstance(self.window, int) or self.window < 2):
+            raise ValueError(f"invalid MotionBitsConfig value window={self.window!r}: must be "
+                             "None (the whole video) or an int >= 2")
+        if self.refine not in ("none", "sam2"):
+            raise ValueError(f"invalid MotionBitsConfig refine {self.refine!r}; choose 'none' or 'sam2'")
+        if self.refine == "sam2" and not self.sam2_path:
+            raise ValueError("MotionBitsConfig(refine='sam2') needs sam2_path: a SAM2 checkpoint folder")
 
     @property
     def grid_side(self) -> int:

@@ -2,8 +2,9 @@
 
 A flow backend is any callable ``flow(prev, next) -> (H, W, 2) float32`` taking two
 (H, W, 3) uint8 RGB frames and returning, for each pixel of ``prev``, its displacement
-(dx, dy) to ``next``. The default is OpenCV's DIS (no weights); any other model (RAFT,
-MemFlow, ...) plugs in through the same signature.
+(dx, dy) to ``next``. The default is OpenCV's DIS (no weights); RAFT from a local
+weights file is built in (``"raft:PATH"``, motionbits/flow_raft.py), and any other model
+(MemFlow, ...) plugs in through the same signature.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ __all__ = [
     "forward_backward_error",
     "sample_maps",
     "pixel_grid",
+    "check_flow",
 ]
 
 
@@ -64,16 +66,51 @@ class DISFlow:
 
 
 def make_flow(spec: str | FlowBackend) -> FlowBackend:
-    """Build a flow backend from a name (``"dis-medium"``, ``"dis-fast"``, ...) or pass one through."""
+    """Build a flow backend from a name or pass a callable through.
+
+    Names: ``"dis-medium"``, ``"dis-fast"``, ``"dis-ultrafast"`` (OpenCV DIS, no weights);
+    ``"raft:PATH"``: torchvision's RAFT from a local weights file
+    (:class:`motionbits.flow_raft.RAFTFlow`; needs torch and torchvision, imported only then).
+    """
     if callable(spec):
         return spec
     name = str(spec).lower()
     if name.startswith("dis-"):
         return DISFlow(name[4:])
+    if name.startswith("raft:"):
+        from motionbits.flow_raft import RAFTFlow
+
+        return RAFTFlow.from_spec(str(spec))
     raise ValueError(
-        f"unknown flow backend {spec!r}: use 'dis-medium', 'dis-fast', 'dis-ultrafast' "
-        "or pass a callable flow(prev, next) -> (H, W, 2) array"
+        f"unknown flow backend {spec!r}: use 'dis-medium', 'dis-fast', 'dis-ultrafast', "
+        "'raft:PATH' (RAFT weights file) or pass a callable flow(prev, next) -> (H, W, 2) array"
     )
+
+
+def check_flow(flow: object, shape: tuple[int, int], backend: object) -> np.ndarray:
+    """Validate what a flow backend returned for two frames of size ``shape`` = (H, W).
+
+    Returns:
+        the flow as an (H, W, 2) float32 array.
+
+    Raises:
+        TypeError / ValueError: not an array, wrong shape, or NaN / infinite values; the
+            message names the backend.
+    """
+    name = getattr(backend, "__name__", None) or repr(backend)
+    if not isinstance(flow, np.ndarray):
+        raise TypeError(f"flow backend {name} returned {type(flow).__name__}, expected an "
+                        f"(H, W, 2) = {(*shape, 2)} numpy array")
+    if flow.shape != (*shape, 2):
+        raise ValueError(f"flow backend {name} returned shape {flow.shape} for frames of "
+                         f"{shape[1]}x{shape[0]}, expected (H, W, 2) = {(*shape, 2)}")
+    if not np.issubdtype(flow.dtype, np.number) or np.issubdtype(flow.dtype, np.complexfloating):
+        raise TypeError(f"flow backend {name} returned dtype {flow.dtype}, expected float32")
+    flow = np.ascontiguousarray(flow, dtype=np.float32)
+    if not np.isfinite(flow).all():
+        raise ValueError(f"flow backend {name} returned NaN or infinite values "
+                         f"({int((~np.isfinite(flow)).sum())} of {flow.size})")
+    return flow
 
 
 @lru_cache(maxsize=4)

@@ -18,8 +18,9 @@ def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
 
     Accepted: (H, W, 3) uint8 RGB; (H, W) or (H, W, 1) uint8 greyscale (replicated to
     three channels); (H, W, 4) uint8 RGBA (alpha dropped); a PIL image of any mode
-    (converted to RGB). Float images are refused rather than guessed at ([0, 1] or
-    [0, 255]?): the error says how to convert them.
+    (converted to RGB). 16-bit input (uint16 arrays, PIL modes "I;16" and "I" with values
+    in 0..65535) is scaled to 8 bits by 255 / 65535, not clipped. Float images are refused
+    rather than guessed at ([0, 1] or [0, 255]?): the error says how to convert them.
 
     Args:
         frame: the frame.
@@ -34,7 +35,14 @@ def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
         (2, 3, 3)
     """
     if hasattr(frame, "convert") and hasattr(frame, "size") and not isinstance(frame, np.ndarray):
-        frame = np.asarray(frame.convert("RGB"))  # PIL image, without importing PIL here
+        # a PIL image, without importing PIL here; 16-bit modes keep their values
+        frame = np.asarray(frame if frame.mode.startswith("I") else frame.convert("RGB"))
+        if frame.dtype.kind == "i":  # mode "I" (int32)
+            if frame.size and (frame.min() < 0 or frame.max() > 65535):
+                raise ValueError(f"{name} is a 32-bit integer image with values outside 0..65535")
+            frame = frame.astype(np.uint16)
+    if isinstance(frame, np.ndarray) and frame.dtype == np.uint16:
+        frame = ((frame.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
     if not isinstance(frame, np.ndarray):
         raise TypeError(
             f"{name} must be an (H, W, 3) uint8 RGB numpy array or a PIL image, got {type(frame).__name__}"

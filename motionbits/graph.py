@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["inv_sym3", "twist_noise_covariance", "local_covariances", "twist_edge_weights", "apply_temporal_constraints", "symmetric_graph"]
+__all__ = ["inv_sym3", "twist_noise_covariance", "local_covariances", "twist_edge_weights", "apply_temporal_constraints", "project_past_max",
+           "symmetric_graph"]
 
 
 def inv_sym3(a: np.ndarray) -> np.ndarray:
@@ -97,6 +98,28 @@ def twist_edge_weights(twists: np.ndarray, neighbors: np.ndarray, cov: np.ndarra
         for j in range(3):
             d2 += diff[..., i] * prec[:, None, i, j] * diff[..., j]
     return np.exp(-0.5 * np.maximum(d2, 0.0))
+
+
+def project_past_max(past_max: np.ndarray, neighbors: np.ndarray, source: np.ndarray
+                     ) -> np.ndarray:
+    """Largest earlier weight of each current edge, read from the previous frame's graph at
+    the nodes nearest to where the edge's endpoints came from.
+
+    Args:
+        past_max: (..., n, k) largest earlier weight of each edge of the previous frame's
+            graph (leading axes: several such graphs, projected alike).
+        neighbors: (n, k) neighbour indices (the same grid at both frames).
+        source: (n,) int index of the node nearest to where each node came from (its
+            backward-flow target, e.g. :meth:`motionbits.nodes.NodeGrid.nearest_node`).
+
+    Returns:
+        (..., n, k) float64; 0 where the edge's source endpoints are not neighbours.
+    """
+    si = source[:, None]
+    sj = source[neighbors]
+    hit = neighbors[si[:, 0]][:, None, :] == sj[:, :, None]  # (n, k, k)
+    vals = np.where(hit, past_max[..., si[:, 0], None, :], 0.0)
+    return vals.max(axis=-1)
 
 
 def apply_temporal_constraints(weights: np.ndarray, neighbors: np.ndarray, history: np.ndarray,

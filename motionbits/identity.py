@@ -9,11 +9,18 @@ information at constant memory.
 
 from __future__ import annotations
 
+from typing import Callable
+
 import cv2
 import numpy as np
+from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 
-__all__ = ["refine_history", "match_ids"]
+__all__ = ["refine_history", "match_ids", "identify_clusters"]
+
+#: Side (nodes) of the square in which a node counts as interior to its cluster (all of
+#: it in one cluster); a new MotionBit needs at least one interior node.
+INTERIOR_WINDOW = 3
 
 
 def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> np.ndarray:
@@ -81,3 +88,67 @@ def match_ids(cluster_of_node: np.ndarray, prior_of_node: np.ndarray, n_clusters
     iou = inter / np.maximum(size_c + size_o - inter, 1)
     rows, cols = linear_sum_assignment(-iou)
     return {int(r) + 1: int(old_ids[c]) for r, c in zip(rows, cols) if iou[r, c] >= min_iou}
+
+
+def identify_clusters(node_cluster: np.ndarray, displacement: np.ndarray,
+                      prior_nodes: np.ndarray, evidence: Callable[[], np.ndarray],
+                      shape: tuple[int, int], next_id: int, tentative: set[int], *,
+                      min_nodes: int, match_iou: float, move_threshold: float,
+                      motion_evidence: float) -> tuple[np.ndarray, np.ndarray, set[int], int]:
+    """Drop noise clusters and give each cluster a stable MotionBit id.
+
+    A cluster continues the earlier MotionBit it overlaps most (:func:`match_ids`); a
+    cluster that continues none is a new MotionBit only if it moves now (eq. 4), which
+    keeps static leftovers of a body's old place from becoming bodies of their own -- and
+    only if its flow explains its images better than "static" (``evidence()``, grey
+    levels per node, averaged over the cluster), which keeps textureless regions with
+    flow smeared in from a moving neighbour from becoming bodies. A MotionBit born at the
+    last frame (``tentative``) stands only if it visibly moves again now.
+
+    Args:
+        node_cluster: (n,) int cluster index of each node (0 = none).
+        displacement: (n,) float px each node's local motion moves it.
+        prior_nodes: (n,) int earlier MotionBit id of each node, carried (0 = none).
+        evidence: called at most once, when some cluster needs it: (n,) float grey levels
+            by which the flow explains each node's neighbourhood better than "static".
+        shape: (rows, cols) of the node grid.
+        next_id: the id the next new MotionBit gets.
+        tentative: ids born at the last frame, not yet confirmed.
+        min_nodes: clusters with fewer nodes are noise.
+        match_iou, move_threshold, motion_evidence: the config's values.
+
+    Returns:
+        node_ids (n,) int64 MotionBit id of each node (0 = none); ids (K,) int64 the ids
+        present, in cluster order; the ids born now (the next ``tentative``); the next
+        ``next_id``.
+    """
+    counts = np.bincount(node_cluster, minlength=1)
+    big = np.flatnonzero(counts >= min_nodes)
+    big = big[big > 0]
+    remap = np.zeros(len(counts), np.int64)
+    remap[big] = np.arange(1, len(big) + 1)
+    cluster = remap[node_cluster]
+    matched = match_ids(cluster, prior_nodes, len(big), match_iou)
+    grid = cluster.reshape(shape)
+    # a node is interior iff its neighbourhood holds one cluster value only
+    interior = (ndimage.maximum_filter(grid, INTERIOR_WINDOW, mode="nearest")
+                == ndimage.minimum_filter(grid, INTERIOR_WINDOW, mode="nearest")).ravel()
+    has_interior = np.bincount(cluster[interior], minlength=len(big) + 1) > 0
+    ids = []
+    newborn = set()
+    for c in range(1, len(big) + 1):
+        sel = cluster == c
+        moves = np.median(displacement[sel]) > move_threshold
+        if c in matched:
+            i = matched[c]
+            ids.append(i if i not in tentative or (
+                moves and np.mean(evidence()[sel]) > motion_evidence) else 0)
+        elif has_interior[c] and moves and np.mean(evidence()[sel]) > motion_evidence:
+            ids.append(next_id)
+            newborn.add(next_id)
+            next_id += 1
+        else:
+            ids.append(0)
+    ids = np.asarray(ids, np.int64)
+    node_ids = np.concatenate([[0], ids])[cluster]
+    return node_ids, ids[ids > 0], newborn, next_id

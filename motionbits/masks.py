@@ -16,7 +16,17 @@ from scipy import ndimage
 from motionbits.nodes import NodeGrid
 from motionbits.twists import kabsch_2d
 
-__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks"]
+__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "SPECK_CELLS"]
+
+#: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
+#: threshold, or this many times the median residual if that is larger ...
+REFIT_FACTOR = 3.0
+#: ... over this many refits.
+REFITS = 2
+#: Side (px) of the square over which photometric residuals are averaged.
+PHOTO_WINDOW = 3
+#: A detached piece of a label smaller than this many grid cells is a speck.
+SPECK_CELLS = 2
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,
@@ -29,7 +39,7 @@ def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np
         weights: (n,) flow reliability of each node.
         node_labels: (n,) label of each node (0 = none).
         labels: (K,) the labels to fit.
-        inlier_threshold: px; the refit keeps nodes within 3x this residual.
+        inlier_threshold: px; the refit keeps nodes within ``REFIT_FACTOR`` x this residual.
 
     Returns:
         theta (K,), t (K, 2) of the backward motion (current -> previous) of each label.
@@ -42,11 +52,11 @@ def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np
         q = back_points[sel].astype(np.float64)
         w = weights[sel].astype(np.float64) + 1e-6
         th, t = kabsch_2d(p, q, w)
-        for _ in range(2):
+        for _ in range(REFITS):
             c, s = np.cos(th), np.sin(th)
             pred = p @ np.array([[c, s], [-s, c]]) + t
             r = np.linalg.norm(pred - q, axis=1)
-            cut = max(3.0 * inlier_threshold, float(np.median(r)) * 3.0)
+            cut = max(REFIT_FACTOR * inlier_threshold, float(np.median(r)) * REFIT_FACTOR)
             th, t = kabsch_2d(p, q, w * (r < cut))
         thetas[i], trans[i] = th, t
     return thetas, trans
@@ -137,7 +147,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         (H, W) int32 label map and the (H, W) bool ``earned`` map of this frame.
     """
     h, w = flow_back.shape[:2]
-    window = 3
+    window = PHOTO_WINDOW
     static_photo = cv2.blur(np.abs(cur_gray - prev_gray), (window, window))
     static_cost = texture * cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + (
         photo_weight * static_photo)

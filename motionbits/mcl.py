@@ -25,7 +25,8 @@ import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["markov_cluster", "markov_cluster_coarse", "normalize_rows", "normalized_similarity", "attractor_labels"]
+__all__ = ["markov_cluster", "markov_cluster_coarse", "normalize_rows", "normalized_similarity",
+           "attractor_labels", "cluster_components", "cluster_component"]
 
 
 def normalize_rows(b: np.ndarray) -> np.ndarray:
@@ -245,3 +246,88 @@ def _group_sums(group: np.ndarray, rows: np.ndarray) -> np.ndarray:
     g = int(group.max()) + 1
     return csr_matrix((np.ones(len(group), rows.dtype), (group, np.arange(len(group)))),
                       shape=(g, len(group))) @ rows
+
+
+def cluster_components(b: np.ndarray, w, comp: np.ndarray, n_seeds: np.ndarray,
+                       nodes: np.ndarray, n_nodes: int, cols: int, *, max_items: int | None,
+                       expansion: int, inflation: float, prune: float, max_iters: int,
+                       stable_iters: int | None, dtype: type, block_fn=None) -> np.ndarray:
+    """Cluster index of every grid node: :func:`cluster_component` on each connected
+    component of the graph, clusters numbered on from those of the components before.
+
+    Args:
+        b: (m, C) soft label embedding of the m graph nodes; a component's seeds are its
+            first columns (seeds numbered within their component).
+        w: (m, m) sparse graph.
+        comp: (m,) int connected component of each graph node.
+        n_seeds: (n_comp,) int seeds of each component.
+        nodes: (m,) int grid node of each graph node.
+        n_nodes: grid nodes in all.
+        cols: columns of the node grid (row-major node numbering).
+        max_items, expansion, inflation, prune, max_iters, stable_iters, dtype, block_fn:
+            as in :func:`cluster_component`.
+
+    Returns:
+        (n_nodes,) int64; 0 = not in the graph, clusters 1..K.
+    """
+    painted_total = int((b.sum(axis=1) > 0).sum())
+    node_cluster = np.zeros(n_nodes, np.int64)
+    n_comp = len(n_seeds)
+    members_of = np.split(np.argsort(comp, kind="stable"),
+                          np.cumsum(np.bincount(comp, minlength=n_comp))[:-1]) if n_comp else []
+    for c, members in enumerate(members_of):
+        cluster = cluster_component(
+            b[members, :n_seeds[c]], w, members, nodes[members], painted_total, cols,
+            max_items=max_items, expansion=expansion, inflation=inflation, prune=prune,
+            max_iters=max_iters, stable_iters=stable_iters, dtype=dtype, block_fn=block_fn)
+        node_cluster[nodes[members]] = cluster + node_cluster.max()
+    return node_cluster
+
+
+def cluster_component(b: np.ndarray, w, members: np.ndarray, nodes: np.ndarray,
+                      painted_total: int, cols: int, *, max_items: int | None, expansion: int,
+                      inflation: float, prune: float, max_iters: int,
+                      stable_iters: int | None, dtype: type, block_fn=None) -> np.ndarray:
+    """Cluster indices 1..K of the nodes of one connected component of a graph.
+
+    MCL (:func:`markov_cluster_coarse`) on the rows of ``b`` that received paint, pruning
+    relative to ``painted_total`` (the painted nodes of the whole frame); nodes that no
+    seed reached are grouped by graph connectivity.
+
+    Args:
+        b: (m, C) soft label embedding of the component's m nodes.
+        w: (M, M) sparse graph of the whole frame.
+        members: (m,) int rows of ``w`` of the component's nodes.
+        nodes: (m,) int grid node of each of them.
+        painted_total: painted nodes of the whole frame.
+        cols: columns of the node grid (row-major node numbering).
+        max_items: MCL runs on at most this many representatives; ``None`` = on every node
+            (the reference computation).
+        expansion, inflation, prune, max_iters, stable_iters, dtype, block_fn: passed to
+            :func:`markov_cluster`.
+
+    Returns:
+        (m,) int64 cluster indices 1..K.
+    """
+    m = b.shape[0]
+    out = np.zeros(m, np.int64)
+    if m == 0:
+        return out
+    painted = b.sum(axis=1) > 0
+    if painted.any():
+        bh = normalize_rows(b[painted])
+        node = nodes[painted]
+        lab, _ = markov_cluster_coarse(
+            bh, np.stack([node // cols, node % cols], axis=1),
+            len(bh) if max_items is None else max_items, expansion=expansion,
+            inflation=inflation, prune=prune, max_iters=max_iters, stable_iters=stable_iters,
+            prune_total=painted_total, dtype=dtype, block_fn=block_fn)
+        out[painted] = lab + 1
+    if not painted.any():  # a component without seeds: connected, so one group
+        out[:] = 1
+    elif not painted.all():
+        rest = members[~painted]
+        sub = w[rest][:, rest]
+        _, comp = connected_components(sub, directed=False)
+        out[~painted] = out.max() + 1 + comp
+    return out

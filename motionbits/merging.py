@@ -24,7 +24,19 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["touching_pairs", "fit_affine", "photometric_residual", "MotionBitGroups"]
+from motionbits.nodes import NodeGrid
+from motionbits.twists import rigid_matrix
+
+__all__ = ["touching_pairs", "fit_affine", "photometric_residual", "MotionBitGroups",
+           "observe_touching"]
+
+#: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
+STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+#: A node is in view when its origin lies this many grid cells inside the previous frame.
+IN_VIEW_CELLS = 2
+#: A new MotionBit was born out of fresh pixels when more than this share of its nodes
+#: came from pixels in view that had never been in a MotionBit.
+BORN_FRESH = 0.5
 
 
 def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
@@ -141,12 +153,6 @@ class MotionBitGroups:
         return rep
 
 
-def rigid_matrix(theta: float, t: np.ndarray) -> np.ndarray:
-    """(2, 3) matrix of the rigid backward motion q = R(theta) p + t."""
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s, t[0]], [s, c, t[1]]], np.float64)
-
-
 def union_excess(labels: np.ndarray, a: int, b: int, motion_a: np.ndarray, motion_b: np.ndarray,
                  union: np.ndarray, cur: np.ndarray, prev: np.ndarray) -> float:
     """Grey levels by which the (2, 3) ``union`` motion explains the worse of MotionBits
@@ -170,3 +176,59 @@ def stillness_visible(labels: np.ndarray, a: int, motion: np.ndarray, cur: np.nd
     ys, xs = np.nonzero(labels == a)
     box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
     return float(photometric_residual(cur, cur, motion, box)[labels[box] == a].mean())
+
+
+def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray,
+                     node_ids: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
+                     trans: np.ndarray, moving: set[int], first_new: int,
+                     history_nodes: np.ndarray, seen_points: np.ndarray,
+                     back_points: np.ndarray, reliability: np.ndarray, cur: np.ndarray,
+                     prev: np.ndarray, *, disagree: float) -> None:
+    """Record in ``groups`` this frame's evidence on every pair of touching MotionBits.
+
+    A MotionBit born now out of pixels in view that had never been in a MotionBit
+    (``BORN_FRESH`` of its nodes) and a moving older MotionBit whose motion would have
+    shown on it are different bodies for good (the pushed block is not the gripper that
+    pushes it). Otherwise, where either has a motion this frame, one affine motion is
+    fitted to the nodes of both and :func:`union_excess` is observed -- a member without
+    motion stands still (``STILL``), which can show that they differ, never that they
+    agree.
+
+    Args:
+        groups: the relations, updated in place.
+        grid: the node grid.
+        labels: (H, W) int32 label map of this frame.
+        node_ids: (n,) int MotionBit id of each node (0 = none).
+        ids: (K,) MotionBit ids with a cluster now, with backward motions ``thetas`` (K,)
+            and ``trans`` (K, 2).
+        moving: ids whose motion moved their nodes this frame.
+        first_new: ids from this one on were born now.
+        history_nodes: (n,) int label-history class of each node (0 = never in a MotionBit).
+        seen_points: (n, 2) where each node came from (true backward flow).
+        back_points: (n, 2) each node's backward target relative to the camera.
+        reliability: (n,) flow reliability of each node.
+        cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
+        disagree: grey levels (config ``merge_disagree``).
+    """
+    own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
+    reach = int(np.ceil(max(grid.cell)))
+    margin = IN_VIEW_CELLS * max(grid.cell)
+    in_view = np.all((seen_points >= margin) & (seen_points < np.array(
+        [grid.width, grid.height]) - margin), axis=1)
+    born = {int(i) for i in ids[ids >= first_new]
+            if np.mean((history_nodes == 0) & in_view, where=node_ids == i) > BORN_FRESH}
+    for a, b in touching_pairs(labels, reach=reach):
+        if groups.known(a, b):
+            continue
+        for x, y in ((a, b), (b, a)):
+            if x in born and y < first_new and y in own and y in moving:
+                if stillness_visible(labels, x, own[y], cur) > disagree:
+                    groups.forbid(x, [y])
+        if groups.known(a, b) or (a not in own and b not in own):
+            continue
+        sel = (node_ids == a) | (node_ids == b)
+        union = fit_affine(grid.points[sel], back_points[sel], reliability[sel])
+        excess = union_excess(labels, a, b, own.get(a, STILL), own.get(b, STILL),
+                              union, cur, prev)
+        if (a in own and b in own) or excess > disagree:
+            groups.observe(a, b, excess)

@@ -31,6 +31,7 @@ __all__ = [
     "Instance",
     "MissingDependencyError",
     "require",
+    "require_attr",
     "check_label_map",
     "instance_from_mask",
     "instances_from_labels",
@@ -56,11 +57,39 @@ def require(module: str, extra: str, purpose: str = "") -> Any:
     """
     try:
         return importlib.import_module(module)
-    except ImportError as exc:
+    except (ImportError, RuntimeError, OSError) as exc:  # e.g. torchvision ops built for another torch
         who = f"{purpose} needs" if purpose else "This needs"
         raise MissingDependencyError(
             f"{who} the optional dependency '{module.split('.')[0]}', which is not installed "
             f"or failed to import ({exc}). Install it with: pip install \"motionbits[{extra}]\""
+        ) from exc
+
+
+def require_attr(module: Any, name: str, extra: str, purpose: str = "") -> Any:
+    """``getattr(module, name)`` for a lazily importing package (transformers), with clear errors.
+
+    transformers imports a class's module on first access; when that import fails (e.g.
+    torchvision's compiled ops do not load against the installed torch) it raises
+    ``ModuleNotFoundError: Could not import module '<name>'`` and keeps the real cause in
+    ``__cause__``. This turns both that and a class the installed version lacks into
+    :class:`MissingDependencyError` naming the underlying cause and the extra to install.
+    """
+    who = purpose or "This"
+    package = module.__name__.split(".")[0]
+    try:
+        return getattr(module, name)
+    except AttributeError:
+        version = getattr(module, "__version__", "?")
+        raise MissingDependencyError(
+            f"{who} needs {package}.{name}, which {package} {version} does not have. "
+            f"Upgrade: pip install -U \"motionbits[{extra}]\""
+        ) from None
+    except (ImportError, RuntimeError, OSError) as exc:
+        cause = exc.__cause__ or exc
+        raise MissingDependencyError(
+            f"{who} could not import {package}.{name}: {type(cause).__name__}: {cause}. "
+            f"Repair the install (torch and torchvision must be matching builds): "
+            f"pip install \"motionbits[{extra}]\""
         ) from exc
 
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
-__all__ = ["grid_seeds", "propagate_labels", "row_stochastic"]
+__all__ = ["grid_seeds", "propagate_components", "propagate_labels", "row_stochastic"]
 
 
 def grid_seeds(rows: int, cols: int, stride: int) -> np.ndarray:
@@ -59,3 +60,34 @@ def propagate_labels(w: sp.csr_matrix, seeds: np.ndarray, iters: int, reseed_eve
         if r % reseed_every == 0:
             b += y
     return b
+
+
+def propagate_components(w: sp.csr_matrix, seeds: np.ndarray, iters: int, reseed_every: int,
+                         dtype: type = np.float64, propagate_fn=None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`propagate_labels` with the seeds numbered within their connected component.
+
+    W is block-diagonal over its connected components and paint never crosses between
+    them, so seeds of different components share columns: one column per seed of the
+    largest component.
+
+    Args:
+        w: (m, m) sparse non-negative affinities.
+        seeds: (S,) indices of seed nodes (into 0..m-1).
+        iters, reseed_every, dtype: as in :func:`propagate_labels`.
+        propagate_fn: optional replacement of :func:`propagate_labels` with its signature
+            (e.g. :meth:`motionbits.torch_ops.TorchOps.propagate_labels`).
+
+    Returns:
+        b (m, C') embedding of type ``dtype``; comp (m,) int component of each node;
+        n_seeds (n_comp,) int seeds of each component (its seeds are b's first columns).
+    """
+    n_comp, comp = connected_components(w, directed=False)
+    seed_comp = comp[seeds]
+    order = np.argsort(seed_comp, kind="stable")
+    starts = np.searchsorted(seed_comp[order], seed_comp[order])
+    classes = np.empty(len(seeds), np.int64)
+    classes[order] = np.arange(len(seeds)) - starts
+    b = (propagate_fn or propagate_labels)(w, seeds, iters, reseed_every, dtype=dtype,
+                                           classes=classes)
+    return b, comp, np.bincount(seed_comp, minlength=n_comp)

@@ -12,7 +12,8 @@ from PIL import Image
 
 from motionbits.frames import as_rgb_array
 
-__all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "IMAGE_SUFFIXES"]
+__all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "read_image",
+           "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
@@ -58,12 +59,45 @@ def _image_files(folder: Path) -> list[Path]:
     return files
 
 
-def _read_image(path: Path) -> np.ndarray:
+def _to_uint8(arr: np.ndarray, name: str) -> np.ndarray:
+    """An image array of a file as uint8: 16-bit (and 16-bit values held in int32) are
+    scaled by 255 / 65535, floats in [0, 1] by 255; NaN or values out of range raise."""
+    if arr.dtype == np.uint8:
+        return arr
+    if arr.dtype == bool:
+        return arr.astype(np.uint8) * 255
+    if np.issubdtype(arr.dtype, np.floating):
+        if not np.isfinite(arr).all():
+            raise ValueError(f"{name} holds NaN or infinite values")
+        if arr.size and (arr.min() < 0 or arr.max() > 1):
+            raise ValueError(f"{name} is a float image with values outside [0, 1] "
+                             f"({arr.min():g}..{arr.max():g})")
+        return np.round(arr * 255).astype(np.uint8)
+    if np.issubdtype(arr.dtype, np.integer) and (arr.size == 0 or (arr.min() >= 0 and arr.max() <= 65535)):
+        return ((arr.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
+    raise ValueError(f"{name} has unsupported pixel type {arr.dtype} (values "
+                     f"{arr.min()}..{arr.max()}); use 8- or 16-bit images")
+
+
+def read_image(path: str | os.PathLike) -> np.ndarray:
+    """Read an image file as (H, W, 3) uint8 RGB.
+
+    8-bit images of any mode are converted to RGB; 16-bit images (PNG, TIFF) are scaled to
+    8 bits (not clipped), float images in [0, 1] likewise; alpha is dropped.
+
+    Raises:
+        ValueError: the file is not a readable image, holds NaN, or an unsupported pixel type.
+    """
+    path = Path(path)
     try:
         with Image.open(path) as im:
-            return np.asarray(im.convert("RGB"))
+            if im.mode in ("1", "L", "P", "RGB", "RGBA", "LA", "PA", "CMYK", "YCbCr", "LAB", "HSV"):
+                return np.asarray(im.convert("RGB"))
+            arr = np.asarray(im)  # "I;16*", "I", "F": one channel of more than 8 bits
     except Exception as exc:  # PIL raises several types for corrupt files
         raise ValueError(f"could not read image {path}: {exc}") from exc
+    arr = _to_uint8(arr, f"image {path}")
+    return np.repeat(arr[..., None], 3, axis=2) if arr.ndim == 2 else arr[..., :3]
 
 
 def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
@@ -85,10 +119,10 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
             raise FileNotFoundError(f"input not found: {path}")
         if path.is_dir():
             for i, f in enumerate(_image_files(path)):
-                yield as_rgb_frame(_read_image(f), name=f"frame {i} ({f.name})")
+                yield as_rgb_frame(read_image(f), name=f"frame {i} ({f.name})")
             return
         if path.suffix.lower() in IMAGE_SUFFIXES:
-            yield as_rgb_frame(_read_image(path), name=str(path))
+            yield as_rgb_frame(read_image(path), name=str(path))
             return
         for i, frame in enumerate(_iter_video_file(path)):
             yield as_rgb_frame(frame, name=f"frame {i} of {path.name}")

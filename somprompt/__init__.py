@@ -42,7 +42,7 @@ from .prompts import (
 )
 from .regions import LabelRegions, Region
 from .registry import MarkRegistry, MarkStyle, mark_text, parse_mark_text
-from .render import MARK_PARTS, RenderedMarks, SetOfMarkRenderer, draw_marks, parse_mode
+from .render import MARK_PARTS, MAX_MARKS, RenderedMarks, SetOfMarkRenderer, draw_marks, parse_mode
 from .video import (
     MarkedVideo,
     frames_for_vlm,
@@ -56,7 +56,7 @@ from .video import (
 
 __all__ = [
     # rendering
-    "SetOfMarkRenderer", "draw_marks", "RenderedMarks", "parse_mode", "MARK_PARTS",
+    "SetOfMarkRenderer", "draw_marks", "RenderedMarks", "parse_mode", "MARK_PARTS", "MAX_MARKS",
     "MaskAnnotator", "ContourAnnotator", "BoxAnnotator", "NumberAnnotator", "auto_text_scale",
     "Color", "ColorPalette", "to_hex", "relative_luminance", "contrast_ratio", "contrasting_color",
     # geometry

@@ -51,7 +51,7 @@ _UNIT = (
     r"(?i:%|°|mm|cm|m|km|in|inch(?:es)?|ft|feet|px|pixels?|deg(?:rees)?|o'?clock|s|sec(?:onds?)?"
     r"|min(?:utes?)?|h|hours?|times|x|kg|g|fps)(?![A-Za-z])"
 )
-_NUM = r"\d{1,4}(?!\d|\.\d)"
+_NUM = r"\d+(?!\d|\.\d)"  # any length: a cited mark that does not exist is reported
 _NUM3 = r"\d{1,3}(?!\d|\.\d)"
 _NUM_KW = rf"{_NUM}(?!\s*{_UNIT})"
 _LET = r"[A-Za-z]{1,2}(?![A-Za-z0-9])"

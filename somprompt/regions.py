@@ -93,6 +93,30 @@ class LabelRegions:
             )
         return out
 
+    @cached_property
+    def areas(self) -> dict[int, int]:
+        """Object id -> pixel count, ascending ids (one pass over the map, no per-object work)."""
+        uniq, counts = np.unique(self.labels, return_counts=True)
+        return {int(i): int(c) for i, c in zip(uniq, counts) if i != 0}
+
+    def largest(self, n: int) -> "tuple[LabelRegions, list[int]]":
+        """The ``n`` largest objects (ties: lower id kept) and the ids of the others.
+
+        Returns:
+            ``(regions, dropped)``: ``self`` and ``[]`` if there are at most ``n`` objects,
+            else new regions on the map with the dropped objects set to background, and
+            the dropped ids, smallest object first.
+        """
+        areas = self.areas
+        if len(areas) <= n:
+            return self, []
+        ids = np.fromiter(areas, np.int64, len(areas))
+        sizes = np.fromiter(areas.values(), np.int64, len(areas))
+        order = np.lexsort((ids, -sizes))  # largest first, then lower id
+        keep, drop = ids[order[:n]], ids[order[n:]][::-1]
+        labels = np.where(np.isin(self.labels, keep), self.labels, 0)
+        return LabelRegions(labels), [int(i) for i in drop]
+
     @property
     def ids(self) -> list[int]:
         """Object ids present, ascending."""

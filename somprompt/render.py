@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from typing import Iterable, Mapping
 
 import numpy as np
@@ -14,7 +15,13 @@ from .inputs import ImageLike, as_rgb_array, like_input
 from .registry import MarkRegistry, MarkStyle
 from .regions import LabelRegions, as_regions
 
-__all__ = ["MARK_PARTS", "parse_mode", "RenderedMarks", "SetOfMarkRenderer", "draw_marks"]
+__all__ = ["MARK_PARTS", "MAX_MARKS", "parse_mode", "RenderedMarks", "SetOfMarkRenderer",
+           "draw_marks"]
+
+MAX_MARKS = 256
+"""Default cap on the objects marked in one frame. Beyond it the smallest objects are left
+unmarked (reported in :attr:`RenderedMarks.dropped` and by a warning): more marks than this
+are unreadable, and placing them would cost quadratic time."""
 
 MARK_PARTS = ("mask", "contour", "box", "number")
 """What a mode can combine, in drawing order (the number is drawn last, on top)."""
@@ -64,12 +71,15 @@ class RenderedMarks:
     Attributes:
         image: the marked frame, same type as the input scene.
         placements: object id -> label placement (empty without the number part).
-        regions: the label map's regions (bboxes, areas).
+        regions: the label map's regions (bboxes, areas), without dropped objects.
+        dropped: ids left unmarked because there were more than ``max_marks`` objects,
+            smallest first.
     """
 
     image: ImageLike
     placements: dict[int, LabelPlacement]
     regions: LabelRegions
+    dropped: tuple[int, ...] = field(default=())
 
 
 class SetOfMarkRenderer:
@@ -85,6 +95,8 @@ class SetOfMarkRenderer:
         thickness: contour and box line width in pixels.
         text_scale: font scale of the numbers; ``None`` = from the image size.
         text_padding: pixels between a number and its box edge.
+        max_marks: mark at most this many objects, the largest (default
+            :data:`MAX_MARKS`; ``None`` = all, at quadratic cost in the number of objects).
 
     Example:
         >>> import numpy as np
@@ -103,7 +115,12 @@ class SetOfMarkRenderer:
         thickness: int = 2,
         text_scale: float | None = None,
         text_padding: int = 3,
+        max_marks: int | None = MAX_MARKS,
     ) -> None:
+        if max_marks is not None and (isinstance(max_marks, bool) or not isinstance(max_marks, int)
+                                      or max_marks < 1):
+            raise ValueError(f"max_marks must be a positive integer or None, got {max_marks!r}")
+        self.max_marks = max_marks
         self.mode = parse_mode(mode)
         self.palette = palette if palette is not None else ColorPalette.default()
         self.mask = MaskAnnotator(self.palette, opacity)
@@ -132,6 +149,13 @@ class SetOfMarkRenderer:
         """
         img = as_rgb_array(scene)
         regions = as_regions(labels, img.shape[:2])
+        dropped: list[int] = []
+        if self.max_marks is not None:
+            regions, dropped = regions.largest(self.max_marks)
+        if dropped:
+            warnings.warn(f"{len(dropped)} of {len(dropped) + len(regions.areas)} objects left "
+                          f"unmarked: more than max_marks={self.max_marks}, smallest dropped",
+                          stacklevel=3)
         if registry is None:
             registry = MarkRegistry()
         registry.register(i for i in regions.ids if i not in registry)
@@ -143,7 +167,7 @@ class SetOfMarkRenderer:
         if "number" in self.mode:
             placements = self.number.place(regions, registry, prefer)
             self.number.draw(out, placements, registry, source=img)
-        return RenderedMarks(like_input(out, scene), placements, regions)
+        return RenderedMarks(like_input(out, scene), placements, regions, tuple(dropped))
 
     def annotate(
         self,

@@ -220,12 +220,6 @@ def test_qwen_images_path_and_system(qwen_dir):
     assert isinstance(out, str)
 
 
-def test_qwen_generate_batch(qwen):
-    videos = [_marked_frames(4), _marked_frames(2)]
-    answers = qwen.generate_batch(videos, ["What moved?", "Anything else?"], max_new_tokens=4)
-    assert len(answers) == 2 and all(isinstance(a, str) for a in answers)
-
-
 def test_qwen_fps_is_forwarded(qwen_dir):
     vlm = Qwen2_5_VLAdapter.from_pretrained(str(qwen_dir), device="cpu", fps=4.0)
     inputs = vlm.prepare_inputs(_marked_frames(4), "What moved?")
@@ -273,6 +267,33 @@ def test_internvl_paths(internvl_dir, frames_as):
     assert cap.shapes[0][0] == len(frames)
 
 
+# ----------------------------------------------------------------------------- batches of unequal videos
+
+
+@pytest.mark.parametrize("family", ["qwen", "videollama", "internvl"])
+def test_generate_batch_on_unequal_videos(family, request):
+    """A 4-frame and a 2-frame video (and a second 4-frame one) in one call: one answer per
+    video, in order, each equal to what `generate` answers for that video alone."""
+    adapter_cls = {"qwen": Qwen2_5_VLAdapter, "videollama": VideoLlama3Adapter, "internvl": InternVLAdapter}[family]
+    path = request.getfixturevalue(f"{family}_dir")
+    vlm = adapter_cls.from_pretrained(str(path), device="cpu", fps=2.0)
+    videos = [_marked_frames(4), _marked_frames(2), _marked_frames(4)[::-1]]
+    prompts = ["What moved?", "Anything else?", "What moved?"]
+    answers = vlm.generate_batch(videos, prompts, max_new_tokens=5)
+    alone = [vlm.generate(v, p, max_new_tokens=5) for v, p in zip(videos, prompts)]
+    assert answers == alone
+
+
+def test_internvl_batches_by_frame_count(internvl_dir):
+    vlm = InternVLAdapter.from_pretrained(str(internvl_dir), device="cpu")
+    cap = _Capture(vlm.model.model.vision_tower)
+    try:
+        vlm.generate_batch([_marked_frames(4), _marked_frames(2), _marked_frames(4)], "What moved?", max_new_tokens=1)
+    finally:
+        cap.remove()
+    assert [s[0] for s in cap.shapes] == [8, 2]  # one forward for the two 4-frame videos, one for the 2-frame one
+
+
 # ----------------------------------------------------------------------------- errors
 
 
@@ -283,8 +304,35 @@ def test_missing_checkpoint_folder_is_a_clear_error(tmp_path):
 
 def test_transformers_without_the_class_names_the_extra(qwen_dir, monkeypatch):
     monkeypatch.setattr(Qwen2_5_VLAdapter, "model_class_name", "NoSuchVLForConditionalGeneration")
-    with pytest.raises(MissingDependencyError, match=r"motionbits\[vlm\]"):
+    with pytest.raises(MissingDependencyError, match=r"does not have.*motionbits\[vlm\]"):
         Qwen2_5_VLAdapter.from_pretrained(str(qwen_dir))
+
+
+@pytest.fixture
+def qwen_class_unimportable(monkeypatch):
+    """transformers' lazy import of the Qwen2.5-VL modeling module fails, as it does when
+    torchvision's compiled ops do not load against the installed torch."""
+    import sys
+
+    lazy = sys.modules["transformers"]  # loading a model can swap this object: take the current one
+    monkeypatch.delattr(lazy, "Qwen2_5_VLForConditionalGeneration", raising=False)
+    monkeypatch.setitem(sys.modules, "transformers.models.qwen2_5_vl.modeling_qwen2_5_vl", None)
+    with pytest.raises(ModuleNotFoundError, match="Could not import module"):  # transformers' own error
+        getattr(lazy, "Qwen2_5_VLForConditionalGeneration")
+
+
+def test_class_import_failure_names_the_cause(qwen_dir, qwen_class_unimportable):
+    with pytest.raises(MissingDependencyError) as err:
+        Qwen2_5_VLAdapter.from_pretrained(str(qwen_dir))
+    msg = str(err.value)
+    assert "could not import transformers.Qwen2_5_VLForConditionalGeneration" in msg
+    assert "modeling_qwen2_5_vl" in msg  # the underlying cause, not transformers' generic message
+    assert 'pip install "motionbits[vlm]"' in msg
+
+
+def test_missing_path_is_checked_before_the_import(tmp_path, qwen_class_unimportable):
+    with pytest.raises(FileNotFoundError, match="no-such-model"):
+        Qwen2_5_VLAdapter.from_pretrained(str(tmp_path / "no-such-model"))
 
 
 def test_processor_without_chat_template_is_rejected(qwen):
@@ -338,3 +386,12 @@ def test_dtype_reaches_model_and_pixels(qwen_dir):
     assert inputs["pixel_values_videos"].dtype == torch.bfloat16
     assert inputs["input_ids"].dtype == torch.long
     assert isinstance(vlm.generate(_marked_frames(2), "What moved?", max_new_tokens=3), str)
+
+
+def test_only_pixels_take_the_model_dtype(qwen_dir):
+    """Qwen's `second_per_grid_ts` feeds temporal position ids: in bfloat16, 2/3 s would be 0.668."""
+    vlm = Qwen2_5_VLAdapter.from_pretrained(str(qwen_dir), device="cpu", dtype="bfloat16", fps=3.0)
+    inputs = vlm.prepare_inputs(_marked_frames(4), "What moved?")
+    assert inputs["pixel_values_videos"].dtype == torch.bfloat16
+    assert inputs["second_per_grid_ts"].dtype == torch.float32
+    assert float(inputs["second_per_grid_ts"][0]) == pytest.approx(2 / 3, abs=1e-6)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, Protocol, Union, runtime_checkable
 import numpy as np
 
 from motionbits.frames import as_rgb_array, sample_frame_indices
-from motionbits.objects import MissingDependencyError, require
+from motionbits.objects import MissingDependencyError, require, require_attr
 
 if TYPE_CHECKING:  # pragma: no cover
     from PIL import Image
@@ -28,6 +28,7 @@ __all__ = [
     "BaseVLM",
     "MissingDependencyError",
     "require",
+    "require_attr",
     "to_rgb_frames",
     "to_pil_frames",
     "sample_frames",
@@ -44,7 +45,7 @@ DEFAULT_MAX_NEW_TOKENS = 256
 
 
 def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
-    """Frames as a list of (H, W, 3) uint8 RGB arrays.
+    """Frames as a list of (H, W, 3) uint8 RGB arrays (each converted by :func:`to_rgb_array`).
 
     Accepts a list of frames (see :func:`motionbits.as_rgb_array`: uint8 RGB, greyscale or
     RGBA arrays, PIL images), or one (T, H, W, 3) array. A single (H, W, 3) frame is
@@ -57,6 +58,9 @@ def to_rgb_frames(frames: Sequence[Frame] | np.ndarray) -> list[np.ndarray]:
             raise ValueError(f"frames must be (T, H, W, 3) or a list of (H, W, 3); got shape {frames.shape}")
     elif hasattr(frames, "convert"):  # one PIL image
         frames = [frames]
+    elif frames is None or isinstance(frames, (str, bytes)) or not hasattr(frames, "__iter__"):
+        raise TypeError("frames must be a list of (H, W, 3) uint8 RGB arrays or PIL images, or a "
+                        f"(T, H, W, 3) array; got {type(frames).__name__}")
     out = [as_rgb_array(f, name=f"frame {i}") for i, f in enumerate(frames)]
     if not out:
         raise ValueError("frames is empty: pass at least one (H, W, 3) uint8 RGB frame")

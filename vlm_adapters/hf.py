@@ -24,6 +24,7 @@ from .base import (
     _broadcast_prompts,
     check_local_path,
     require,
+    require_attr,
     resolve_device,
     resolve_dtype,
     to_pil_frames,
@@ -60,6 +61,9 @@ class TransformersVLM(BaseVLM):
     default_frames_as: ClassVar[str] = "video"
     #: default `name`
     default_name: ClassVar[str] = "transformers-vlm"
+    #: the processor stacks each video's frames into one (B, T, C, H, W) tensor, so one forward
+    #: batch (``frames_as="video"``) can only hold videos with the same number of frames
+    stacks_video_frames: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -116,15 +120,10 @@ class TransformersVLM(BaseVLM):
             model_kwargs / processor_kwargs: extra arguments for the two ``from_pretrained`` calls
                 (e.g. ``processor_kwargs={"max_pixels": 640 * 28 * 28}``).
         """
+        path = check_local_path(path_or_id, what=f"{cls.__name__} checkpoint")
         transformers = require("transformers", "vlm", cls.__name__)
         require("torch", "vlm", cls.__name__)
-        model_cls = getattr(transformers, cls.model_class_name, None)
-        if model_cls is None:
-            raise MissingDependencyError(
-                f"{cls.__name__} needs transformers.{cls.model_class_name}, which transformers "
-                f"{transformers.__version__} does not have. Upgrade: pip install -U \"motionbits[vlm]\""
-            )
-        path = check_local_path(path_or_id, what=f"{cls.__name__} checkpoint")
+        model_cls = require_attr(transformers, cls.model_class_name, "vlm", cls.__name__)
         device = resolve_device(device)
         dtype = resolve_dtype(dtype, device)
         mkw = dict(model_kwargs or {})
@@ -138,6 +137,11 @@ class TransformersVLM(BaseVLM):
         try:
             model = model_cls.from_pretrained(path, dtype=dtype, **mkw)
             processor = transformers.AutoProcessor.from_pretrained(path, **pkw)
+        except ImportError as exc:  # e.g. a processor whose torchvision fails to load
+            raise MissingDependencyError(
+                f"{cls.__name__} could not load '{path_or_id}' (a module it needs failed to import): "
+                f"{type(exc).__name__}: {exc}. Repair the install: pip install \"motionbits[vlm]\""
+            ) from exc
         except OSError as exc:
             raise OSError(
                 f"could not load a {cls.model_class_name} checkpoint from '{path_or_id}': {exc}\n"
@@ -214,9 +218,15 @@ class TransformersVLM(BaseVLM):
             kwargs["images"] = [img for c in clips for img in c]
         kwargs.update(self.default_call_kwargs())
         kwargs.update(self.processor_call_kwargs)
-        inputs = self.processor(**kwargs)
-        # pixel values to the model's device and dtype (e.g. bfloat16 on CUDA); ids stay integer
-        return inputs.to(device=self.device, dtype=getattr(self.model, "dtype", None))
+        inputs = self.processor(**kwargs).to(self.device)
+        # only pixel values take the model's dtype (e.g. bfloat16 on CUDA): other float outputs,
+        # such as Qwen's `second_per_grid_ts` (temporal positions), keep their precision
+        dtype = getattr(self.model, "dtype", None)
+        if dtype is not None:
+            for key in [k for k in inputs if k.startswith("pixel_values")]:
+                if inputs[key].is_floating_point():
+                    inputs[key] = inputs[key].to(dtype)
+        return inputs
 
     # ------------------------------------------------------------------ generation
     def _generate(
@@ -289,17 +299,35 @@ class TransformersVLM(BaseVLM):
         seed: int | None = None,
         **generate_kwargs: Any,
     ) -> list[str]:
-        """One answer per video, in one padded forward batch (left padding)."""
+        """One answer per video, in one padded forward batch (left padding).
+
+        Where the family's processor cannot batch videos of different lengths
+        (`stacks_video_frames`), videos are batched by frame count: one forward batch per
+        distinct length; answers come back in the order of `videos`.
+        """
         prompts = _broadcast_prompts(prompts, len(videos))
-        inputs = self.prepare_inputs(list(videos), prompts, system)
-        return self._generate(
-            inputs,
-            max_new_tokens=max_new_tokens,
-            do_sample=do_sample,
-            temperature=temperature,
-            seed=seed,
-            generate_kwargs=generate_kwargs,
-        )
+        clips = [to_pil_frames(v) for v in videos]
+        if self.frames_as == "video" and self.stacks_video_frames:
+            groups: dict[int, list[int]] = {}
+            for i, clip in enumerate(clips):
+                groups.setdefault(len(clip), []).append(i)
+            batches = list(groups.values())
+        else:
+            batches = [list(range(len(clips)))]
+        answers: list[str] = [""] * len(clips)
+        for idx in batches:
+            inputs = self.prepare_inputs([clips[i] for i in idx], [prompts[i] for i in idx], system)
+            out = self._generate(
+                inputs,
+                max_new_tokens=max_new_tokens,
+                do_sample=do_sample,
+                temperature=temperature,
+                seed=seed,
+                generate_kwargs=generate_kwargs,
+            )
+            for i, answer in zip(idx, out):
+                answers[i] = answer
+        return answers
 
     def __repr__(self) -> str:
         return (

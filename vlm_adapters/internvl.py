@@ -53,6 +53,7 @@ class InternVLAdapter(TransformersVLM):
     model_class_name = "InternVLForConditionalGeneration"
     default_frames_as = "video"
     default_name = "internvl"
+    stacks_video_frames = True  # InternVLVideoProcessor returns (B, T, 3, S, S)
 
     def default_call_kwargs(self) -> dict[str, Any]:
         return {"crop_to_patches": False} if self.frames_as == "images" else {}
@@ -101,9 +102,9 @@ class InternVideo25Adapter(BaseVLM):
                 "For a checkpoint that needs no remote code use InternVLAdapter with an InternVL '-hf' "
                 "checkpoint."
             )
+        path = check_local_path(path_or_id, what=f"{cls.__name__} checkpoint")
         transformers = require("transformers", "vlm", cls.__name__)
         require("torch", "vlm", cls.__name__)
-        path = check_local_path(path_or_id, what=f"{cls.__name__} checkpoint")
         device = resolve_device(device)
         dtype = resolve_dtype(dtype, device)
         model = transformers.AutoModel.from_pretrained(

@@ -105,7 +105,17 @@ def phrases_from_answer(text: str, max_phrases: int | None = 16) -> list[str]:
     Returns:
         short lower-case noun phrases, in answer order, no duplicates. An answer in the
         requested format that lists only "none" gives an empty list (nothing moved).
+
+    Raises:
+        TypeError: ``text`` is not a string (e.g. None: the VLM produced no answer).
+        ValueError: ``max_phrases`` is not a positive integer or None.
     """
+    if not isinstance(text, str):
+        raise TypeError(f"the answer must be a str, got {type(text).__name__}"
+                        + ("; the VLM produced no answer" if text is None else ""))
+    if max_phrases is not None and (isinstance(max_phrases, bool) or not isinstance(max_phrases, int)
+                                    or max_phrases < 1):
+        raise ValueError(f"max_phrases must be a positive integer or None, got {max_phrases!r}")
     names = [obj.name for obj in parse_named_objects(text)]
     if not names and not _SAYS_NONE.search(text):
         names = extract_noun_phrases(text)

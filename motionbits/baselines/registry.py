@@ -27,7 +27,11 @@ __all__ = ["Method", "MethodInfo", "register_method", "make_method", "available_
 
 class Method(Protocol):
     def __call__(self, frames: list[np.ndarray]) -> np.ndarray:
-        """Label map ((H, W) int32) of the last of ``frames`` ((H, W, 3) uint8 RGB each)."""
+        """Label map ((H, W) int32) of the last of ``frames`` ((H, W, 3) uint8 RGB each).
+
+        A method whose attribute ``needs_scene`` is true is called as
+        ``method(frames, scene=folder)`` by the benchmark runner (e.g. to read stored flow).
+        """
         ...
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motionbits.commands.segment import add_video_options, config_from_args
+from motionbits.commands.segment import _check_options, add_video_options
 
 __all__ = ["register", "run"]
 
@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
            "command"}
     options = {k: v for k, v in vars(args).items() if k not in own}
     # bad option values fail here, once, rather than in every video
-    config_from_args(args)
+    _check_options(args)
     items = expand_inputs(args.inputs)
     try:
         report = run_batch(items, args.out, options, engine=args.engine, workers=args.workers,

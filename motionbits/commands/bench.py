@@ -15,10 +15,12 @@ import os
 import platform
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from motionbits.config import MotionBitsConfig
+from motionbits.errors import InputError
 from motionbits.segmenter import STAGES, MotionBitsResult, MotionBitsSegmenter
 
 __all__ = ["register", "run", "ClipTiming", "time_clip", "parse_size"]
@@ -33,7 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "number of nodes and the input size. Timings are wall-clock on this "
                     "machine: close other work first.")
     p.add_argument("--frames", type=int, default=16, help="clip length (default: %(default)s)")
-    p.add_argument("--size", default="480x640", help="HxW of the clip (default: %(default)s)")
+    p.add_argument("--size", default="640x480", metavar="WxH",
+                   help="width x height of the clip, as in 'synth' (default: %(default)s)")
     p.add_argument("--nodes", type=int, default=MotionBitsConfig.n_nodes,
                    help="grid nodes n (default: %(default)s)")
     p.add_argument("--backend", default=MotionBitsConfig.backend,
@@ -50,12 +53,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def parse_size(text: str) -> tuple[int, int]:
+    """``"WxH"`` (width first, as ``synth --size``) -> ``(H, W)``; each side at least 32."""
     try:
-        h, w = (int(v) for v in text.lower().split("x"))
+        w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise ValueError(f"--size must look like 480x640, got {text!r}") from None
-    if h < 8 or w < 8:
-        raise ValueError(f"--size must be at least 8x8, got {text!r}")
+        raise InputError(f"--size must be WIDTHxHEIGHT like 640x480, got {text!r}") from None
+    if h < 32 or w < 32:
+        raise InputError(f"--size {text} is too small (at least 32x32)")
     return h, w
 
 
@@ -162,8 +166,20 @@ def run(args: argparse.Namespace) -> int:
 
     size = parse_size(args.size)
     if args.frames < 2:
-        raise ValueError("--frames must be >= 2 (the first frame only primes the stream)")
-    config = MotionBitsConfig(n_nodes=args.nodes, max_side=max(size), backend=args.backend)
+        raise InputError("--frames must be >= 2 (the first frame only primes the stream)")
+    if args.scaling_frames < 2:
+        raise InputError("--scaling-frames must be >= 2 (the first frame only primes the stream)")
+    if args.max_scenes is not None and args.max_scenes < 1:
+        raise InputError(f"--max-scenes must be >= 1, got {args.max_scenes}")
+    if args.data and not Path(args.data).exists():
+        raise InputError(f"--data {args.data} not found")
+    try:
+        config = MotionBitsConfig(n_nodes=args.nodes, max_side=max(size), backend=args.backend)
+        MotionBitsSegmenter(config)  # a missing extra (torch) or GPU fails here, before timing
+    except (TypeError, ValueError, RuntimeError) as exc:
+        from motionbits.commands.segment import config_option_error
+
+        raise config_option_error(exc, {"n_nodes": args.nodes, "backend": args.backend}) from None
     clip = demo_clip(n_frames=args.frames, size=size)
     print(f"MotionBits bench: {args.frames} frames {size[0]}x{size[1]}, n = "
           f"{config.grid_side ** 2} nodes, flow {config.flow}, backend {config.backend}; "

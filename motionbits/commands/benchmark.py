@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
+from contextlib import nullcontext
+
+from motionbits.errors import InputError
+from motionbits.outputs import StagedFolder, check_output_file, write_text_atomic
 
 __all__ = ["register", "run", "parse_method_options"]
 
@@ -69,6 +72,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--list", action="store_true", help="list the registered methods and exit")
     p.add_argument("--json", metavar="FILE", help="write all scores and timings here")
     p.add_argument("--save-pred", metavar="DIR", help="write predictions as DIR/<method>/<track>/<scene>.png")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing --save-pred folder of an earlier run (default: refuse)")
     p.add_argument("--max-scenes", type=int, metavar="N", help="only the first N scenes per track")
     p.add_argument("--pooled", action="store_true", help="also print the pooled (UOIS) table")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -93,20 +98,31 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"unknown method(s) {', '.join(unknown)}; available: {', '.join(known)}")
     names = list(dict.fromkeys(args.methods))
     options = parse_method_options(args.option, names, list(known))
+    if args.max_scenes is not None and args.max_scenes < 1:
+        raise InputError(f"--max-scenes must be >= 1, got {args.max_scenes}")
     methods = {}
     for name in names:
         try:
             methods[name] = make_method(name, **options.get(name, {}))
-        except ImportError as exc:  # e.g. a plug-in's optional dependency; the message names the extra
-            raise ValueError(f"method {name!r} cannot be built: {exc}") from exc
-    results, spf = run_benchmark(args.data, methods, save_pred=args.save_pred,
-                                 max_scenes=args.max_scenes, progress=not args.quiet)
+        except (ImportError, TypeError, ValueError, KeyError) as exc:
+            # a plug-in's optional dependency (the message names the extra), an unknown
+            # option or a value of the wrong type: all before any scene is run
+            raise InputError(f"method {name!r} cannot be built: {exc}") from exc
+    if args.json:
+        check_output_file(args.json, "--json")
+    staged = (StagedFolder(args.save_pred, overwrite=args.overwrite, option="--save-pred",
+                           replaceable=set(known)) if args.save_pred else nullcontext())
+    with staged:  # predictions appear at --save-pred only if the whole run succeeded
+        results, spf = run_benchmark(args.data, methods,
+                                     save_pred=staged.path if args.save_pred else None,
+                                     max_scenes=args.max_scenes, progress=not args.quiet)
+        if args.save_pred:
+            staged.publish()
     print(format_table(results, block="macro", seconds_per_frame=spf), end="")
     if args.pooled:
         print()
         print(format_table(results, block="pooled", seconds_per_frame=spf), end="")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         payload = {"methods": results, "seconds_per_frame": spf}
-        Path(args.json).write_text(json.dumps(json_ready(payload), indent=1, allow_nan=False))
+        write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))
     return 0

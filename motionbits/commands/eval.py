@@ -6,6 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
+from motionbits.outputs import check_output_file, write_text_atomic
+
 __all__ = ["register", "run", "parse_pred_spec"]
 
 
@@ -48,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
     from motionbits.eval.dataset import evaluate_dataset
     from motionbits.eval.table import format_table, json_ready
 
+    if args.json:
+        check_output_file(args.json, "--json")
     results = {}
     for spec in args.pred:
         name, folder = parse_pred_spec(spec)
@@ -63,6 +67,5 @@ def run(args: argparse.Namespace) -> int:
         print(format_table(results, block="pooled"), end="")
     if args.json:
         payload = next(iter(results.values())) if len(results) == 1 else {"methods": results}
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(json_ready(payload), indent=1, allow_nan=False))
+        write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))
     return 0

@@ -37,7 +37,8 @@ def run_benchmark(
     Args:
         data: a MoRiBo scene, track or folder of tracks.
         methods: ``{name: method}``; a method maps a list of (H, W, 3) uint8 frames to the
-            (H, W) int label map of the last frame.
+            (H, W) int label map of the last frame; one with a true ``needs_scene``
+            attribute also gets ``scene=`` the scene folder.
         save_pred: if given, write ``<save_pred>/<method>/<track>/<scene>.png`` (readable by
             ``motionbits eval``).
         max_scenes: score only the first scenes of each track.
@@ -68,7 +69,8 @@ def run_benchmark(
                 continue
             t0 = time.perf_counter()
             try:
-                pred = np.asarray(method(frames))
+                pred = np.asarray(method(frames, scene=scene.path)
+                                  if getattr(method, "needs_scene", False) else method(frames))
             except ImportError as exc:
                 unavailable[name] = str(exc)
                 print(f"benchmark: skipping method {name}: {exc}", file=sys.stderr)

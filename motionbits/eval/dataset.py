@@ -113,14 +113,10 @@ def scene_frames(scene: Scene | Path) -> list[Path]:
 
 
 def load_frames(scene: Scene | Path) -> list[np.ndarray]:
-    """The scene's frames as a list of (H, W, 3) uint8 RGB arrays."""
-    from PIL import Image
+    """The scene's frames as a list of (H, W, 3) uint8 RGB arrays (16-bit images scaled)."""
+    from motionbits.video import read_image
 
-    out = []
-    for f in scene_frames(scene):
-        with Image.open(f) as im:
-            out.append(np.asarray(im.convert("RGB")))
-    return out
+    return [read_image(f) for f in scene_frames(scene)]
 
 
 def load_ground_truth(scene: Scene | Path) -> tuple[np.ndarray, np.ndarray | None]:

@@ -53,8 +53,8 @@ from scipy import ndimage
 from motionbits.eval.boundary import (
     boundary_counts, boundary_map, boundary_tolerance, disk, pair_boundary_hits,
 )
-from motionbits.eval.matching import hungarian_match
-from motionbits.eval.overlap import contingency, overlap_scores
+from motionbits.eval.matching import sparse_hungarian_match
+from motionbits.eval.overlap import contingency, pair_scores
 
 __all__ = ["FrameScores", "evaluate_frame", "summarize", "METRIC_KEYS", "INSTANCE_KEYS", "FP_KEYS"]
 
@@ -180,16 +180,17 @@ def evaluate_frame(
     pred = np.asarray(pred).astype(np.int64, copy=False)
     gt = np.asarray(gt).astype(np.int64, copy=False)
     k, m = c.gt_ids.size, c.pred_ids.size
-    sc = overlap_scores(c)
-    rows, cols = hungarian_match(sc["F"])
+    sc = pair_scores(c)  # only pairs that share a pixel: bounded by the image size
+    rows, cols = sparse_hungarian_match(k, m, sc["gt"], sc["pred"], sc["F"])
+    pair = _pair_index(sc, m, rows, cols)
 
     zeros = lambda: np.zeros(k, np.float64)  # noqa: E731
     iou, prec, rec, f1, bprec, brec = zeros(), zeros(), zeros(), zeros(), zeros(), zeros()
     matched = np.zeros(k, np.int64)
-    iou[rows] = sc["IoU"][rows, cols]
-    prec[rows] = sc["P"][rows, cols]
-    rec[rows] = sc["R"][rows, cols]
-    f1[rows] = sc["F"][rows, cols]
+    iou[rows] = sc["IoU"][pair]
+    prec[rows] = sc["P"][pair]
+    rec[rows] = sc["R"][pair]
+    f1[rows] = sc["F"][pair]
     matched[rows] = c.pred_ids[cols]
 
     # Boundaries (DAVIS seg2bmap of each object's mask), ignored pixels dropped.
@@ -219,7 +220,7 @@ def evaluate_frame(
 
     pooled = _pooled_edge_case(k, m)
     if pooled is None:
-        tp = float(c.tp[rows, cols].sum())
+        tp = float(sc["tp"][pair].sum())
         p_all = tp / float(c.pred_sizes.sum())
         r_all = tp / float(c.gt_sizes.sum())
         bp_all = hits_p.sum() / nb_pred.sum() if nb_pred.sum() else 1.0
@@ -229,7 +230,7 @@ def evaluate_frame(
             "BP": float(bp_all), "BR": float(br_all), "BF1": float(_f1(bp_all, br_all)),
             "pct75": float(np.mean(f1 >= F75 - 1e-9)),
         }
-    static = c.table[0, :]  # GT background row: [unpredicted, predicted objects...]
+    static = c.background_row  # GT background: [unpredicted, predicted objects...]
     return FrameScores(
         gt_ids=c.gt_ids, pred_ids=c.pred_ids, matched_pred=matched, iou=iou, precision=prec,
         recall=rec, f1=f1, bprecision=bprec, brecall=brec, bf1=bf1,
@@ -237,6 +238,12 @@ def evaluate_frame(
         static_pixels=int(static.sum()), static_fp_pixels=int(static[1:].sum()),
         spurious=int(m - len(rows)),
     )
+
+
+def _pair_index(sc: dict[str, np.ndarray], m: int, rows: np.ndarray,
+                cols: np.ndarray) -> np.ndarray:
+    """Positions in ``pair_scores`` arrays (sorted by (gt, pred)) of the pairs (rows, cols)."""
+    return np.searchsorted(sc["gt"] * m + sc["pred"], rows * m + cols)
 
 
 def _index_map(labels: np.ndarray, ids: np.ndarray, keep: np.ndarray | None) -> np.ndarray:

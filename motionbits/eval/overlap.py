@@ -16,42 +16,61 @@ import numpy as np
 
 from motionbits.eval.labelmaps import check_label_map, compact_labels
 
-__all__ = ["Contingency", "contingency", "overlap_scores"]
+__all__ = ["Contingency", "contingency", "overlap_scores", "pair_scores"]
 
 
 @dataclass(frozen=True)
 class Contingency:
-    """Pixel counts of every (GT object, predicted object) pair of one frame.
+    """Pixel counts of every (GT object, predicted object) pair of one frame, stored
+    sparsely: only pairs that share a pixel (at most one per pixel), so the cost is
+    bounded by the image size, whatever the number of ids.
 
     Attributes:
-        table: (K + 1, M + 1) int64; ``table[i, j]`` = number of pixels with GT index i and
-            predicted index j, index 0 = background. Ignored pixels are not counted.
-        gt_ids: (K,) int64 original GT labels of rows 1..K.
-        pred_ids: (M,) int64 original predicted labels of columns 1..M.
+        gt_ids: (K,) int64 original GT labels of indices 1..K.
+        pred_ids: (M,) int64 original predicted labels of indices 1..M.
+        rows, cols, counts: (nnz,) int64: GT index (0 = background), predicted index
+            (0 = background) and pixel count of each pair that occurs. Ignored pixels are
+            not counted.
     """
 
-    table: np.ndarray
     gt_ids: np.ndarray
     pred_ids: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    counts: np.ndarray
+
+    @property
+    def table(self) -> np.ndarray:
+        """Dense (K + 1, M + 1) int64 table, index 0 = background (O(K M) memory)."""
+        out = np.zeros((self.gt_ids.size + 1, self.pred_ids.size + 1), np.int64)
+        out[self.rows, self.cols] = self.counts
+        return out
 
     @property
     def tp(self) -> np.ndarray:
-        """(K, M) int64 intersections of objects (background row and column dropped)."""
+        """Dense (K, M) int64 intersections of objects (background row and column dropped)."""
         return self.table[1:, 1:]
+
+    @property
+    def background_row(self) -> np.ndarray:
+        """(M + 1,) int64 pixels of GT background per predicted index (0 = background)."""
+        bg = self.rows == 0
+        return np.bincount(self.cols[bg], self.counts[bg],
+                           minlength=self.pred_ids.size + 1).astype(np.int64)
 
     @property
     def gt_sizes(self) -> np.ndarray:
         """(K,) int64 pixels of each GT object."""
-        return self.table[1:, :].sum(axis=1)
+        return np.bincount(self.rows, self.counts, minlength=self.gt_ids.size + 1)[1:].astype(np.int64)
 
     @property
     def pred_sizes(self) -> np.ndarray:
         """(M,) int64 pixels of each predicted object."""
-        return self.table[:, 1:].sum(axis=0)
+        return np.bincount(self.cols, self.counts, minlength=self.pred_ids.size + 1)[1:].astype(np.int64)
 
 
 def contingency(pred: np.ndarray, gt: np.ndarray, ignore: np.ndarray | None = None) -> Contingency:
-    """Count the pixels of every (GT label, predicted label) pair with one ``np.bincount``.
+    """Count the pixels of every (GT label, predicted label) pair that occurs.
 
     Args:
         pred: (H, W) non-negative integer predicted labels (0 = background).
@@ -78,17 +97,37 @@ def contingency(pred: np.ndarray, gt: np.ndarray, ignore: np.ndarray | None = No
         p, g = p[keep], g[keep]
     gi, gt_ids = compact_labels(g)
     pj, pred_ids = compact_labels(p)
-    k, m = gt_ids.size, pred_ids.size
-    table = np.bincount(gi * (m + 1) + pj, minlength=(k + 1) * (m + 1)).reshape(k + 1, m + 1)
-    return Contingency(table=table.astype(np.int64), gt_ids=gt_ids, pred_ids=pred_ids)
+    pairs, counts = np.unique(gi * (pred_ids.size + 1) + pj, return_counts=True)
+    rows, cols = np.divmod(pairs, pred_ids.size + 1)
+    return Contingency(gt_ids=gt_ids, pred_ids=pred_ids, rows=rows.astype(np.int64),
+                       cols=cols.astype(np.int64), counts=counts.astype(np.int64))
+
+
+def pair_scores(c: Contingency) -> dict[str, np.ndarray]:
+    """Scores of the object pairs that share a pixel (the only ones that can match).
+
+    Returns:
+        dict of (L,) arrays: ``"gt"`` and ``"pred"`` (int64, 0-based object indices),
+        ``"tp"`` (int64) and ``"P"``, ``"R"``, ``"F"``, ``"IoU"`` (float64; formulas in the
+        module docstring).
+    """
+    obj = (c.rows > 0) & (c.cols > 0)
+    i, j, tp = c.rows[obj] - 1, c.cols[obj] - 1, c.counts[obj]
+    gs = c.gt_sizes.astype(np.float64)[i]
+    ps = c.pred_sizes.astype(np.float64)[j]
+    t = tp.astype(np.float64)
+    prec, rec = t / ps, t / gs
+    return {"gt": i, "pred": j, "tp": tp, "P": prec, "R": rec, "F": 2 * prec * rec / (prec + rec),
+            "IoU": t / (gs + ps - t)}
 
 
 def overlap_scores(c: Contingency) -> dict[str, np.ndarray]:
     """Precision, recall, F and IoU of every (GT, predicted) object pair.
 
     Returns:
-        dict of (K, M) float64 arrays ``"P"``, ``"R"``, ``"F"``, ``"IoU"`` (formulas in the
-        module docstring; all 0 where tp = 0).
+        dict of dense (K, M) float64 arrays ``"P"``, ``"R"``, ``"F"``, ``"IoU"`` (formulas in
+        the module docstring; all 0 where tp = 0). O(K M) memory: for many ids use
+        :func:`pair_scores`.
     """
     tp = c.tp.astype(np.float64)
     gs = c.gt_sizes.astype(np.float64)[:, None]

@@ -8,19 +8,22 @@ positions, the camera, the clip length and a straight push of the mocap pusher.
 * ``hand`` (like the human-in-the-wild track): a rigid hand pushes an articulated part
   (drawer, cabinet door, laptop lid) or an object among 4-7 free objects and 1-3 static
   distractors; more bodies, more clutter.
+* ``pickplace`` (harder): natural textures, shadows, an articulated hand or gripper carries
+  a block across the table while other bodies move; see :mod:`~motionbits.synth.mujoco_pickplace`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from motionbits.synth.mujoco_choreo import Choreography
 from motionbits.synth.mujoco_mjcf import MJCFScene, Part
 
 __all__ = ["TRACKS", "Camera", "ScenePlan", "compose_scene"]
 
-TRACKS = ("robot", "hand")
+TRACKS = ("robot", "hand", "pickplace")
 TABLE_HALF = (0.45, 0.35)
 _TIP_RADIUS = 0.012  # half thickness of the pusher's contact surface (fingers / fingertips)
 
@@ -50,6 +53,11 @@ class ScenePlan:
         yaw: pusher heading in radians (its forearm trails behind the push direction).
         target: name and kind of the part the push is aimed at.
         parts: names and kinds of all placed parts.
+        script: scripted agents, carries and kicks; ``None`` = the straight push of the
+            mocap body ``pusher`` from ``start`` to ``end`` (robot and hand tracks).
+        assets: file name -> bytes of textures the MJCF refers to.
+        max_travel: a body moving farther than this (m) makes the clip implausible.
+        cameras: one camera per frame (a moving camera); ``None`` = ``camera`` throughout.
     """
 
     track: str
@@ -63,6 +71,10 @@ class ScenePlan:
     yaw: float
     target: tuple[str, str]
     parts: tuple[tuple[str, str], ...]
+    script: Choreography | None = None
+    assets: dict[str, bytes] = field(default_factory=dict)
+    max_travel: float = 0.35
+    cameras: tuple[Camera, ...] | None = None
 
 
 def _place(rng: np.random.Generator, parts: list[Part], radius: float,
@@ -109,6 +121,10 @@ def compose_scene(track: str, rng: np.random.Generator, *, width: int = 640,
     """
     if track not in TRACKS:
         raise ValueError(f"unknown track {track!r}; choose one of {TRACKS}")
+    if track == "pickplace":
+        from motionbits.synth.mujoco_pickplace import compose_pickplace
+
+        return compose_pickplace(rng, width=width, height=height)
     s = MJCFScene(rng, width=max(width, 64), height=max(height, 64))
     s.table(TABLE_HALF)
     hx, hy = TABLE_HALF

@@ -1,0 +1,163 @@
+"""One segmentation run over a window of a video, shared by the agent tool and the web app."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from motionbits import MotionBitsConfig, MotionBitsSegmenter, iter_frames
+from somprompt import MarkRegistry
+
+__all__ = ["MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_window", "max_frames_for",
+           "segment_window"]
+
+#: Most frames one call processes (frames and label maps are kept in memory and returned) ...
+MAX_WINDOW_FRAMES = 300
+#: ... and most pixels over all of them: 300 frames of 480x640, 44 of 1920x1080 (about
+#: 7 bytes a pixel are kept: RGB and an int32 label).
+MAX_WINDOW_PIXELS = 300 * 480 * 640
+
+
+def max_frames_for(height: int, width: int) -> int:
+    """Most frames of ``height`` x ``width`` one window may hold (at least 2)."""
+    return max(2, min(MAX_WINDOW_FRAMES, MAX_WINDOW_PIXELS // max(1, height * width)))
+
+#: progress(done, total or None)
+Progress = Callable[[int, "int | None"], None]
+
+
+@dataclass
+class Segmentation:
+    """MotionBits of a window of a video.
+
+    Attributes:
+        video: the input path.
+        frame_indices: index in the video of each processed frame.
+        frames: processed frames, (H, W, 3) uint8 RGB.
+        label_maps: one (H, W) int32 label map per processed frame (0 = background).
+        moved: MotionBit id -> video frame indices in which it moved.
+        twists: MotionBit id -> (omega rad/step, v_x, v_y px/step) at its latest motion.
+        config: the segmenter's parameters.
+        seconds: wall time of the segmentation.
+    """
+
+    video: str
+    frame_indices: list[int]
+    frames: list[np.ndarray]
+    label_maps: list[np.ndarray]
+    moved: dict[int, list[int]] = field(default_factory=dict)
+    twists: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    config: MotionBitsConfig = field(default_factory=MotionBitsConfig)
+    seconds: float = 0.0
+
+    @cached_property
+    def registry(self) -> MarkRegistry:
+        """MotionBit id -> mark number (order of first appearance), as on the overlay
+        (``somprompt.mark_video``) and in ``GroundedVQA``."""
+        return MarkRegistry.from_label_maps(self.label_maps)
+
+    @property
+    def last_ids(self) -> list[int]:
+        """Ids of the MotionBits in the last processed frame, ascending."""
+        return [int(i) for i in np.unique(self.label_maps[-1]) if i > 0]
+
+
+def _int_arg(name: str, value: object, minimum: int, allow_none: bool = False) -> int | None:
+    if value is None and allow_none:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    if value < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    return int(value)
+
+
+def check_window(start: object = 0, frames: object = None, every: object = 1,
+                 n_nodes: object = MotionBitsConfig.n_nodes) -> tuple[int, int | None, int, int]:
+    """Validate the window arguments; returns them as ints (``frames`` may be None).
+
+    Raises:
+        ValueError: a non-integer or out-of-range value (one line naming it).
+    """
+    s = _int_arg("start", start, 0)
+    f = _int_arg("frames", frames, 2, allow_none=True)
+    e = _int_arg("every", every, 1)
+    n = _int_arg("n_nodes", n_nodes, 16)
+    if f is not None and f > MAX_WINDOW_FRAMES:
+        raise ValueError(f"frames must be <= {MAX_WINDOW_FRAMES}, got {f}")
+    return s, f, e, n
+
+
+def _check_video(video: object) -> Path:
+    if not isinstance(video, (str, os.PathLike)) or not str(video).strip():
+        raise ValueError(f"video must be the path of a video file or image folder, got {video!r}")
+    path = Path(os.path.expanduser(os.fspath(video)))
+    if not path.exists():
+        raise FileNotFoundError(f"video not found: {path}")
+    return path
+
+
+def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | None = None,
+                   every: int = 1, n_nodes: int = MotionBitsConfig.n_nodes,
+                   config: MotionBitsConfig | None = None,
+                   progress: Progress | None = None) -> Segmentation:
+    """Segment frames ``start, start + every, ...`` (at most ``frames`` of them) of a video.
+
+    Args:
+        video: a video file or a folder of images.
+        start: index of the first frame used.
+        frames: how many frames to use (>= 2; None: to the end). At most
+            ``max_frames_for(H, W)`` frames (``MAX_WINDOW_FRAMES``, fewer for large frames).
+        every: use every ``every``-th frame.
+        n_nodes: graph nodes of the segmenter (``MotionBitsConfig.n_nodes``).
+        config: other segmenter parameters (``n_nodes`` overrides its field).
+        progress: called as ``progress(done, total)`` after each frame (``total`` is None
+            when ``frames`` is None).
+
+    Raises:
+        FileNotFoundError: no such file or folder.
+        ValueError: a bad argument, an unreadable video, fewer than two frames in the
+            window, or more than ``max_frames_for(H, W)``.
+    """
+    start, frames, every, n_nodes = check_window(start, frames, every, n_nodes)
+    path = _check_video(video)
+    cfg = (config or MotionBitsConfig()).with_(n_nodes=n_nodes)
+    seg = MotionBitsSegmenter(cfg)
+    out = Segmentation(str(path), [], [], [], config=cfg)
+    t0 = time.perf_counter()
+    cap = MAX_WINDOW_FRAMES
+    for i, frame in enumerate(iter_frames(path)):
+        if i < start or (i - start) % every:
+            continue
+        if not out.frames:
+            cap = max_frames_for(*frame.shape[:2])
+            if frames is not None and frames > cap:
+                raise ValueError(f"frames={frames} is too many at {frame.shape[1]}x{frame.shape[0]}: "
+                                 f"at most {cap} frames of this size per call")
+        if len(out.frames) == (frames or cap):
+            if frames is None:
+                raise ValueError(f"the window holds more than {cap} frames of {frame.shape[1]}x"
+                                 f"{frame.shape[0]} (the most per call); choose fewer with frames= "
+                                 "or a larger every=")
+            break
+        result = seg.update(frame)
+        out.frame_indices.append(i)
+        out.frames.append(frame)
+        out.label_maps.append(result.labels)
+        for mb in result.motionbits:
+            if mb.moving:
+                out.moved.setdefault(mb.id, []).append(i)
+                out.twists[mb.id] = mb.twist
+        if progress is not None:
+            progress(len(out.frames), frames)
+    out.seconds = time.perf_counter() - t0
+    if len(out.frames) < 2:
+        where = f"from frame {start} with every={every}" if start or every > 1 else "in the video"
+        raise ValueError(f"need at least 2 frames to see motion, found {len(out.frames)} {where}")
+    return out

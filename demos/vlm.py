@@ -1,0 +1,95 @@
+"""Which VLM answers questions in the demos: the stub, a local model folder or an endpoint."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from somprompt import MarkRegistry
+
+__all__ = ["VLMError", "make_vlm", "stub_answer", "vlm_spec_help"]
+
+#: transformers ``model_type`` (config.json) -> ``vlm_adapters.load_vlm`` kind
+_MODEL_TYPES = {"qwen2_5_vl": "qwen2.5-vl", "internvl": "internvl", "video_llama_3": "videollama3"}
+
+
+class VLMError(RuntimeError):
+    """A VLM could not be loaded or did not answer (one-line message for the user)."""
+
+
+def vlm_spec_help() -> str:
+    """The VLM specs :func:`make_vlm` accepts, in one line."""
+    return ("stub (default, scripted: does not look at the video), stub:TEXT, a local model folder "
+            "(Qwen2.5-VL, InternVL or VideoLLaMA3 in transformers format), KIND:PATH "
+            "(qwen2.5-vl, internvl, videollama3, internvideo2.5), openai:URL@MODEL "
+            "(an OpenAI-compatible server such as vLLM)")
+
+
+def stub_answer(label_maps: Sequence[np.ndarray]) -> str:
+    """What the default stub says: it cites the largest MotionBit of the last frame.
+
+    ``label_maps``: the (H, W) integer label maps of the video, in order (mark numbers
+    are given in order of first appearance, as GroundedVQA does).
+    """
+    last = np.asarray(label_maps[-1])
+    ids, counts = np.unique(last[last > 0], return_counts=True)
+    if len(ids) == 0:
+        return "Stub VLM (scripted, it does not look at the video): no MotionBit is marked."
+    registry = MarkRegistry.from_label_maps(label_maps)
+    mark = registry.text(int(ids[np.argmax(counts)]))
+    return (f"Stub VLM (scripted, it does not look at the video): the largest moving body "
+            f"is [{mark}].")
+
+
+def _kind_of_folder(folder: Path) -> str:
+    config = folder / "config.json"
+    try:
+        model_type = json.loads(config.read_text()).get("model_type", "")
+    except (OSError, ValueError) as exc:
+        raise VLMError(f"{folder} is not a transformers model folder (cannot read config.json: {exc})") from None
+    if model_type not in _MODEL_TYPES:
+        raise VLMError(f"{folder}: model_type {model_type!r} is not supported; use one of "
+                       f"{', '.join(sorted(_MODEL_TYPES))} or a KIND:PATH spec")
+    return _MODEL_TYPES[model_type]
+
+
+def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float = 120.0) -> Any:
+    """Build the VLM named by ``spec`` (see :func:`vlm_spec_help`).
+
+    Args:
+        spec: ``"stub"``, ``"stub:TEXT"``, a local model folder, ``"KIND:PATH"`` or
+            ``"openai:URL@MODEL"``.
+        stub_text: what the plain ``"stub"`` answers (default: a fixed sentence).
+        timeout: seconds an endpoint may take to answer.
+
+    Returns:
+        An object with ``generate(frames, prompt, system=None) -> str``.
+
+    Raises:
+        VLMError: the spec is malformed, the folder is not a supported model, or loading
+            failed (the message says why in one line).
+    """
+    from vlm_adapters import OpenAICompatibleVLM, StubVLM
+    from vlm_adapters.plugin import load_vlm, parse_vlm_spec
+
+    spec = (spec or "stub").strip()
+    if spec == "stub":
+        return StubVLM(stub_text or "Stub VLM (scripted, it does not look at the video).")
+    expanded = os.path.expanduser(spec)
+    if os.path.isdir(expanded):
+        spec = f"{_kind_of_folder(Path(expanded))}:{expanded}"
+    try:
+        kind, arg = parse_vlm_spec(spec)
+        if kind == "openai":
+            url, at, model = arg.rpartition("@")
+            if not at or not url or not model:
+                raise ValueError(f"use openai:URL@MODEL, got {spec!r}")
+            return OpenAICompatibleVLM(url, model, timeout=timeout)
+        return load_vlm(spec)
+    except Exception as exc:  # any loader failure becomes one readable line
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise VLMError(f"could not load the VLM {spec!r}: {msg}") from exc

@@ -1,0 +1,149 @@
+"""What a frame's segmentation returns: the label map and one record per MotionBit."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import cv2
+import numpy as np
+from scipy import ndimage
+
+from motionbits.nodes import NodeGrid
+from motionbits.objects import Instance, encode_rle
+from motionbits.twists import se2_log
+
+__all__ = ["MotionBit", "MotionBitsResult", "MotionSpans", "moving_ids", "build_result"]
+
+#: One MotionBit in one frame: the shared :class:`motionbits.Instance` with ``twist``,
+#: ``moving``, ``first_moved`` and ``last_moved`` set (coordinates in input pixels; the
+#: twist is zeros when it has no cluster this frame). ``update`` leaves ``mask`` unset
+#: (the label map holds it): :meth:`MotionBitsResult.instances` attaches masks.
+MotionBit = Instance
+
+
+@dataclass
+class MotionBitsResult:
+    """Output of :meth:`MotionBitsSegmenter.update` for one frame.
+
+    Attributes:
+        frame_index: 0-based index of the frame in the stream.
+        labels: (H, W) int32 at the input size; 0 = background, k > 0 = MotionBit k.
+        motionbits: one record per id present in ``labels``.
+        node_labels: (rows, cols) int32 MotionBit id of every grid node (0 = none).
+        timings: milliseconds spent per stage (see ``STAGES``).
+    """
+
+    frame_index: int
+    labels: np.ndarray
+    motionbits: list[MotionBit]
+    node_labels: np.ndarray
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def ids(self) -> list[int]:
+        return [mb.id for mb in self.motionbits]
+
+    def instances(self, rle: bool = False) -> list[Instance]:
+        """``motionbits`` with their (H, W) bool masks from ``labels`` (or COCO RLE when
+        ``rle``; extra ``coco``); ``motionbits.to_supervision`` takes the result."""
+        return [replace(mb, mask=None if rle else self.labels == mb.id,
+                        rle=encode_rle(self.labels == mb.id) if rle else None)
+                for mb in self.motionbits]
+
+
+@dataclass
+class MotionSpans:
+    """First and last frame at which each MotionBit id moved.
+
+    Attributes:
+        first, last: id -> frame index.
+    """
+
+    first: dict[int, int] = field(default_factory=dict)
+    last: dict[int, int] = field(default_factory=dict)
+
+    def record(self, moving, frame_index: int) -> None:
+        """The ids ``moving`` moved at ``frame_index``."""
+        for i in moving:
+            self.first.setdefault(int(i), frame_index)
+            self.last[int(i)] = frame_index
+
+
+def moving_ids(points: np.ndarray, node_ids: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
+               trans: np.ndarray, threshold: float) -> set[int]:
+    """Ids whose fitted motion moves their nodes by more than ``threshold`` px (mean).
+
+    Args:
+        points: (n, 2) node positions.
+        node_ids: (n,) int MotionBit id of each node (0 = none).
+        ids: (K,) ids with backward motions ``thetas`` (K,) and ``trans`` (K, 2).
+        threshold: px/frame (config ``move_threshold``).
+    """
+    moving = set()
+    for lab, th, t in zip(ids, thetas, trans):
+        c, s = np.cos(th), np.sin(th)
+        p = points[node_ids == lab]
+        moved = p @ np.array([[c, s], [-s, c]]) + t - p
+        if float(np.mean(np.linalg.norm(moved, axis=1))) > threshold:
+            moving.add(int(lab))
+    return moving
+
+
+def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids: np.ndarray,
+                 thetas: np.ndarray, trans: np.ndarray, moving: set[int], rep: dict[int, int],
+                 spans: MotionSpans, grid: NodeGrid, input_size: tuple[int, int]
+                 ) -> MotionBitsResult:
+    """The records of the MotionBits shown: each group of merged ids under its
+    representative, with the twist of its largest member that has a motion this frame.
+
+    Args:
+        frame_index: index of the frame.
+        labels: (h, w) int32 working-resolution label map.
+        node_ids: (n,) int MotionBit id of each grid node (0 = none).
+        ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,), ``trans`` (K, 2).
+        moving: ids that moved this frame.
+        rep: id -> the id it is shown under (0 = not shown), for the ids in ``labels``.
+        spans: first / last frame of motion of each id.
+        grid: the node grid (its image size is the working resolution).
+        input_size: (H, W) of the input frames.
+
+    Returns:
+        :class:`MotionBitsResult` with (H, W) labels at the input size (no timings).
+    """
+    h, w = input_size
+    scale = w / grid.width, h / grid.height
+    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1)
+    for i, r in rep.items():
+        lut[i] = r
+    out = lut[labels].astype(np.int32)
+    node_out = lut[np.minimum(node_ids, len(lut) - 1)] * (node_ids < len(lut))
+    members: dict[int, list[int]] = {}
+    for i, r in rep.items():
+        members.setdefault(r, []).append(i)
+    counts = np.bincount(node_ids, minlength=len(lut))
+    twists = {int(i): -se2_log(th, t) for i, th, t in zip(ids, thetas, trans)}
+    if (h, w) != out.shape:
+        out = cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)
+    records = []
+    for index, box in enumerate(ndimage.find_objects(out)):
+        if box is None:
+            continue
+        lab = index + 1
+        group = members.get(lab, [lab])
+        with_motion = [i for i in group if i in twists]
+        tw = twists[max(with_motion, key=lambda i: counts[i])] if with_motion else np.zeros(3)
+        first = [spans.first[i] for i in group if i in spans.first]
+        last = [spans.last[i] for i in group if i in spans.last]
+        ys, xs = np.nonzero(out[box] == lab)
+        ys, xs = ys + box[0].start, xs + box[1].start
+        records.append(MotionBit(
+            id=lab, area=int(len(xs)),
+            bbox=(box[1].start, box[0].start, box[1].stop, box[0].stop),
+            centroid=(float(xs.mean()), float(ys.mean())),
+            twist=(float(tw[0]), float(tw[1] * scale[0]), float(tw[2] * scale[1])),
+            moving=any(i in moving for i in group),
+            first_moved=min(first, default=frame_index),
+            last_moved=max(last, default=frame_index),
+        ))
+    return MotionBitsResult(frame_index, out, records,
+                            node_out.reshape(grid.rows, grid.cols).astype(np.int32))

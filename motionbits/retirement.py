@@ -1,0 +1,128 @@
+"""Did a MotionBit really move? Its origin image against its accumulated motion (ours).
+
+A MotionBit can be born where the flow moved and the world did not: in the wake of an arm
+sweeping in front of a wall, under smeared flow beside a fast body. Such a MotionBit then
+stops, and a stopped MotionBit keeps its mask -- so it would stay for good. The test that
+tells it from a body that really moved and stopped: keep the frame before its birth, and the motion accumulated since (current -> that frame) both of
+the MotionBit and of the static world (the camera's motion; identity for a static camera).
+If the world's motion explains the MotionBit's pixels today clearly better than its own
+accumulated motion does, it never moved: it is retired.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from motionbits.twists import rigid_matrix
+
+__all__ = ["Origin", "moved_evidence", "retire"]
+
+#: px: below this median distance between where a MotionBit's own and the world's
+#: accumulated motions put its pixels, the two cannot be told apart (no verdict).
+MIN_SEPARATION = 2.0
+#: About this many of a MotionBit's pixels measure that distance.
+SEPARATION_SAMPLES = 200
+
+
+@dataclass
+class Origin:
+    """Where a MotionBit came from.
+
+    Attributes:
+        frame: (H, W) float32 grey frame before its birth (shared, never modified).
+        body: (3, 3) accumulated backward motion of the MotionBit (current -> birth frame).
+        world: (3, 3) accumulated backward motion of the static world.
+    """
+
+    frame: np.ndarray
+    body: np.ndarray
+    world: np.ndarray
+
+    def advance(self, body_step: np.ndarray, world_step: np.ndarray) -> None:
+        """Compose one more frame's (3, 3) backward motions (current -> previous)."""
+        self.body = self.body @ body_step
+        self.world = self.world @ world_step
+
+
+def _residual(frame: np.ndarray, motion: np.ndarray, cur: np.ndarray, box, inside) -> float:
+    """Mean |cur - frame pulled back by ``motion``| over ``inside`` of the image box ``box``
+    (NaN if less than half of those pixels come from inside ``frame``)."""
+    to_frame = motion @ np.array(
+        [[1.0, 0.0, box[1].start], [0.0, 1.0, box[0].start], [0.0, 0.0, 1.0]])
+    size = (box[1].stop - box[1].start, box[0].stop - box[0].start)
+    warped = cv2.warpPerspective(frame, to_frame, size,
+                                 flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                 borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+    diff = np.abs(cur[box] - warped)[inside]
+    diff = diff[np.isfinite(diff)]
+    return float(diff.mean()) if diff.size > 0.5 * inside.sum() else np.nan
+
+
+def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
+                   min_separation: float) -> float:
+    """Grey levels by which the MotionBit's own accumulated motion explains its pixels
+    ``mask`` (H, W) bool in ``cur_gray`` better than the static world's motion does
+    (negative: it never moved). NaN when the two motions move its pixels less than
+    ``min_separation`` px apart (nothing to tell) or its origin is out of view."""
+    ys, xs = np.nonzero(mask)
+    if len(xs) == 0:
+        return np.nan
+    step = max(1, len(xs) // SEPARATION_SAMPLES)
+    pts = np.stack([xs[::step], ys[::step], np.ones(len(xs[::step]))]).astype(np.float64)
+
+    def apply(m):
+        q = m @ pts
+        return q[:2] / q[2]
+
+    if np.median(np.linalg.norm(apply(origin.body) - apply(origin.world), axis=0)) < min_separation:
+        return np.nan
+    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
+    inside = mask[box]
+    return _residual(origin.frame, origin.world, cur_gray, box, inside) - _residual(
+        origin.frame, origin.body, cur_gray, box, inside)
+
+
+def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
+           thetas: np.ndarray, trans: np.ndarray, first_new: int, cam: np.ndarray | None,
+           prev_gray: np.ndarray, cur_gray: np.ndarray, margin: float
+           ) -> tuple[np.ndarray, dict[int, Origin]]:
+    """Advance every MotionBit's origin by this frame's motions and retire those whose
+    pixels the static world explains better, by more than ``margin`` grey levels, than
+    their own accumulated motion (:func:`moved_evidence`).
+
+    Args:
+        labels: (H, W) int32 label map of this frame.
+        origins: id -> its :class:`Origin`, from the last frame (the Origins are advanced
+            in place).
+        ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,), ``trans`` (K, 2)
+            (relative to the camera); an id without one moves with the world.
+        first_new: ids from this one on were born now: their origin is ``prev_gray``.
+        cam: (3, 3) camera motion of this frame (current -> previous) or None (static).
+        prev_gray: (H, W) float32 previous grey frame (not stabilised).
+        cur_gray: (H, W) float32 current grey frame.
+        margin: grey levels (config ``retire_margin``).
+
+    Returns:
+        ``labels`` without the retired MotionBits, and the origins of those present.
+    """
+    world = np.eye(3) if cam is None else cam
+    own = {int(i): world @ np.vstack([rigid_matrix(th, t), [0.0, 0.0, 1.0]])
+           for i, th, t in zip(ids, thetas, trans)}
+    present = set(np.unique(labels[labels > 0]).tolist())
+    origins = {i: o for i, o in origins.items() if i in present}
+    out = labels
+    for i in sorted(present):
+        if i >= first_new:
+            origins[i] = Origin(prev_gray, np.eye(3), np.eye(3))
+        origin = origins.get(i)
+        if origin is None:
+            continue
+        origin.advance(own.get(i, world), world)
+        gain = moved_evidence(origin, cur_gray, labels == i, MIN_SEPARATION)
+        if gain < -margin:
+            out = np.where(out == i, 0, out)
+            del origins[i]
+    return out, origins

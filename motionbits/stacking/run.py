@@ -1,0 +1,100 @@
+"""Run the tower-stacking table: every method on the same seeded trials (paper Table 3)."""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from motionbits.stacking.trial import (
+    FAILURES,
+    TrialConfig,
+    TrialResult,
+    push_scene,
+    run_trial,
+)
+from motionbits.video_writer import H264Writer
+
+__all__ = ["GT", "format_table", "run_stacking", "summarise"]
+
+GT = "gt"  #: method name of the ground-truth masks (the controller's ceiling)
+
+
+def run_stacking(methods: list[str], trials: int, seed: int, *, config: TrialConfig = TrialConfig(),
+                 video_dir: str | Path | None = None,
+                 progress: Callable[[str], None] | None = print) -> dict[str, list[TrialResult]]:
+    """Run ``trials`` trials of every method (trial ``i`` is the same scene and push for all).
+
+    Args:
+        methods: names from :func:`motionbits.baselines.available_methods`, or ``"gt"``.
+        trials: number of trials.
+        seed: selects the scenes and pushes.
+        config: trial parameters.
+        video_dir: if given, ``<dir>/<method>_trial<i>.mp4`` of every trial (H.264).
+        progress: called with one line per finished trial (None: silent).
+
+    Returns:
+        ``{method: [TrialResult, ...]}``.
+
+    Raises:
+        KeyError: an unknown method name.
+        ValueError: ``trials < 1``.
+    """
+    from motionbits.baselines import make_method
+
+    if trials < 1:
+        raise ValueError(f"--trials must be >= 1, got {trials}")
+    fns = {m: (None if m == GT else make_method(m)) for m in methods}
+    results: dict[str, list[TrialResult]] = {m: [] for m in methods}
+    for i in range(trials):
+        pushed = push_scene(seed, i, config)
+        if progress:
+            progress(f"trial {i}: push clip {len(pushed.frames)} frames, {pushed.pushed}/5 objects "
+                     f"moved, {pushed.seconds:.1f} s")
+        for m in methods:
+            if video_dir is None:
+                r = run_trial(m, fns[m], pushed, config, gt=(m == GT))
+            else:
+                with H264Writer(Path(video_dir) / f"{m}_trial{i}.mp4", 1.0 / config.frame_dt) as w:
+                    r = run_trial(m, fns[m], pushed, config, video=w.write, gt=(m == GT))
+            results[m].append(r)
+            if progress:
+                state = "success" if r.success else f"failed ({r.failure})"
+                progress(f"  {m:>14}: {state}, {r.stacked} stacked, {r.n_masks} masks, "
+                         f"segmentation {r.segment_seconds:.1f} s, trial {r.seconds:.1f} s")
+    return results
+
+
+def summarise(results: dict[str, list[TrialResult]]) -> dict:
+    """The JSON of the issue: ``{"methods": {NAME: {"success": k, "trials": n,
+    "stacked_mean": x, "failures": {REASON: count}}}}`` (plus timing)."""
+    out = {}
+    for m, rs in results.items():
+        n = len(rs)
+        out[m] = {
+            "success": int(sum(r.success for r in rs)),
+            "trials": n,
+            "stacked_mean": float(np.mean([r.stacked for r in rs])) if n else 0.0,
+            "stacked_total": int(sum(r.stacked for r in rs)),
+            "failures": dict(Counter(r.failure for r in rs if r.failure)),
+            "segment_seconds_mean": float(np.mean([r.segment_seconds for r in rs])) if n else 0.0,
+            "trial_seconds_mean": float(np.mean([r.seconds for r in rs])) if n else 0.0,
+        }
+    return {"methods": out}
+
+
+def format_table(summary: dict) -> str:
+    """Table 3's layout: method, # stacked objects (total over trials, and mean), SR,
+    failure reasons."""
+    rows = [("Method", "# Stacked Objs", "SR", "Failures")]
+    for m, s in summary["methods"].items():
+        fails = ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items(),
+                                                         key=lambda kv: FAILURES.index(kv[0])))
+        rows.append((m, f"{s['stacked_total']} ({s['stacked_mean']:.1f}/trial)",
+                     f"{s['success']} / {s['trials']}", fails or "-"))
+    widths = [max(len(r[c]) for r in rows) for c in range(4)]
+    lines = ["  ".join(v.ljust(w) for v, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)

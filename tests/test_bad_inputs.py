@@ -1,0 +1,822 @@
+"""Every bad or edge input gets a one-line error or a correct result (issue 12).
+
+One table of cases over the CLI (``segment``, ``bench``, ``eval``, ``synth``,
+``benchmark``) and the Python API of ``motionbits``, ``somprompt`` and ``vlm_adapters``.
+Each case is run and given a verdict:
+
+- ``clear error``: CLI exit status 2 (130 for an interrupt) with exactly one stderr line
+  ``motionbits CMD: error: ...`` holding the expected words; API: a ValueError /
+  TypeError / OSError / ImportError whose message is one line holding them;
+- ``correct result``: exit status 0 / a return value that passes the case's check;
+- ``traceback``: an exception of another kind, or a traceback on stderr;
+- ``silently wrong``: success where an error was due, or a result that fails its check;
+- ``hang``: no answer within the case's time limit;
+- ``unclear error``: a failure without traceback whose message is not one line naming the
+  problem (e.g. behind a stale progress bar, or about something the user never passed).
+
+Every case must get the verdict it expects, and leave nothing partial (``*.partial-*``)
+or stale on disk. ``python tests/test_bad_inputs.py`` prints the verdict counts.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import signal
+import sys
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+from unittest import mock
+
+import cv2
+import numpy as np
+import pytest
+from PIL import Image
+
+CLEAR, CORRECT, TRACEBACK, WRONG, HANG, UNCLEAR = (
+    "clear error", "correct result", "traceback", "silently wrong", "hang", "unclear error")
+VERDICTS = (CLEAR, CORRECT, TRACEBACK, WRONG, HANG, UNCLEAR)
+API_ERRORS = (ValueError, TypeError, OSError, ImportError)
+SEG = ["--nodes", "400", "--max-side", "160", "--quiet"]  # small and fast
+SEG_BIG = ["--nodes", "2500", "--max-side", "320", "--quiet"]  # finds the demo clip's bodies
+
+
+class Hang(BaseException):
+    """Raised by the alarm when a case runs past its time limit."""
+
+
+@dataclass
+class Outcome:
+    rc: int | None = None  # CLI exit status (None for an API call)
+    out: str = ""
+    err: str = ""
+    exc: BaseException | None = None  # exception that escaped
+    value: Any = None  # API return value
+    warns: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Case:
+    id: str
+    run: Callable[[Path], Outcome]
+    expect: str  # CLEAR or CORRECT
+    words: str = ""  # CLEAR: words the message must hold
+    check: Callable[[Outcome, Path], bool] | None = None  # CORRECT: the result is right
+    absent: tuple[str, ...] = ()  # paths under tmp that must not exist afterwards
+    rc: int = 2
+    limit: float = 60.0
+    requires: Callable[[], str | None] | None = None  # returns why the case cannot run here
+
+
+# --------------------------------------------------------------------------- inputs
+
+def _clip(n=6, size=(120, 160)):
+    from motionbits.synth import demo_clip
+
+    return demo_clip(n_frames=n, size=size)
+
+
+def _write_frames(folder: Path, frames, ext=".png", convert=None) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    for i, f in enumerate(frames):
+        img = Image.fromarray(f) if convert is None else convert(f)
+        img.save(folder / f"{i:05d}{ext}")
+    return folder
+
+
+def _write_video(path: Path, frames, fourcc="mp4v", fps=10) -> Path:
+    h, w = frames[0].shape[:2]
+    wr = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), fps, (w, h))
+    for f in frames:
+        wr.write(cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
+    wr.release()
+    return path
+
+
+def build_assets(root: Path) -> Path:
+    """Every input file the cases read (a few hundred kB), under ``root``."""
+    root.mkdir(parents=True, exist_ok=True)
+    clip = _clip()
+    frames = clip.frames
+    _write_frames(root / "frames", frames)
+    _write_video(root / "clip.mp4", frames)
+    avi = _write_video(root / "clip.avi", _clip(20).frames, "MJPG").read_bytes()
+    (root / "cut.avi").write_bytes(avi[: len(avi) // 2])  # header says 20 frames
+    (root / "empty.mp4").write_bytes(b"")
+    (root / "text.mp4").write_text("not a video\n" * 50)
+    (root / "empty_dir").mkdir()
+    (root / "txt_dir").mkdir()
+    (root / "txt_dir" / "a.txt").write_text("hello")
+    # 16-bit greyscale and 16-bit RGB (OpenCV writes 16-bit RGB PNGs; PIL only reads them),
+    # at 240x320 where the segmenter finds the demo's bodies, and their 8-bit twins
+    big = _clip(4, (240, 320)).frames
+    _write_frames(root / "rgb8", big)
+    grey = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in big]
+    _write_frames(root / "grey8", grey)
+    _write_frames(root / "grey16", grey, convert=lambda g: Image.fromarray(g.astype(np.uint16) * 257))
+    (root / "rgb16").mkdir()
+    for i, f in enumerate(big):
+        cv2.imwrite(str(root / "rgb16" / f"{i:05d}.png"),
+                    cv2.cvtColor(f, cv2.COLOR_RGB2BGR).astype(np.uint16) * 257)
+    _write_frames(root / "rgba", frames, convert=lambda f: Image.fromarray(f).convert("RGBA"))
+    _write_frames(root / "palette", frames, convert=lambda f: Image.fromarray(f).quantize(64))
+    _write_frames(root / "float_big", frames[:3], ".tif",
+                  convert=lambda f: Image.fromarray(f[..., 0].astype(np.float32)))
+    nan = frames[0][..., 0].astype(np.float32) / 255
+    nan[5, 5] = np.nan
+    _write_frames(root / "float_nan", [nan] * 3, ".tif", convert=Image.fromarray)
+    mixed = _write_frames(root / "mixed", frames[:3])
+    Image.fromarray(_clip(1, (100, 160)).frames[0]).save(mixed / "00003.png")
+    corrupt = _write_frames(root / "corrupt", frames[:4])
+    (corrupt / "00002.png").write_bytes(b"\x89PNG\r\n\x1a\n broken")
+    _write_frames(root / "thin", [np.full((8, 4000, 3), 90 + 20 * i, np.uint8) for i in range(2)])
+    _write_frames(root / "tiny", [np.zeros((8, 8, 3), np.uint8)] * 2)
+    _write_frames(root / "one", frames[:1])
+    _write_frames(root / "ünï cødé", frames[:3])
+    # a MoRiBo dataset: track/scene/{frames/, gt.png}
+    scene = root / "data" / "robot" / "scene_0000"
+    _write_frames(scene / "frames", frames)
+    Image.fromarray(clip.gt.astype(np.uint16)).save(scene / "gt.png")
+    pred = root / "pred" / "robot"
+    pred.mkdir(parents=True)
+    Image.fromarray(clip.gt.astype(np.uint16)).save(pred / "scene_0000.png")
+    small = root / "pred_small" / "robot"
+    small.mkdir(parents=True)
+    Image.fromarray(clip.gt[:60].astype(np.uint16)).save(small / "scene_0000.png")
+    return root
+
+
+@pytest.fixture(scope="module")
+def assets(tmp_path_factory) -> Path:
+    return build_assets(tmp_path_factory.mktemp("assets"))
+
+
+# --------------------------------------------------------------------------- runners
+
+def cli(*argv: str, patches: tuple = ()) -> Callable[[Path], Outcome]:
+    """A CLI case: ``motionbits ARGV`` in-process ("{a}" = assets, "{t}" = tmp)."""
+    def run(tmp: Path) -> Outcome:
+        from motionbits.cli import main
+
+        args = [a.format(a=tmp.parent / "assets", t=tmp) for a in argv]
+        out, err = io.StringIO(), io.StringIO()
+        o = Outcome()
+        with contextlib.ExitStack() as stack:
+            for p in patches:
+                stack.enter_context(p())
+            stack.enter_context(contextlib.redirect_stdout(out))
+            stack.enter_context(contextlib.redirect_stderr(err))
+            try:
+                o.rc = main(args)
+            except SystemExit as exc:  # argparse
+                o.rc = exc.code if isinstance(exc.code, int) else 2
+            except Hang:
+                raise
+            except BaseException as exc:  # noqa: BLE001 - a traceback is a verdict here
+                o.exc = exc
+        o.out, o.err = out.getvalue(), err.getvalue()
+        return o
+    return run
+
+
+def api(fn: Callable[[Path], Any]) -> Callable[[Path], Outcome]:
+    """An API case: ``fn(tmp)``; its return value is checked, its exception judged."""
+    def run(tmp: Path) -> Outcome:
+        o = Outcome()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                o.value = fn(tmp)
+            except Hang:
+                raise
+            except BaseException as exc:  # noqa: BLE001
+                o.exc = exc
+        o.warns = [str(w.message) for w in caught]
+        return o
+    return run
+
+
+def verdict(case: Case, o: Outcome) -> tuple[str, str]:
+    """(verdict, why) of one outcome."""
+    if o.rc is None:  # API
+        if o.exc is not None:
+            msg = str(o.exc)
+            if not isinstance(o.exc, API_ERRORS) or "\n" in msg.strip() or not msg:
+                return TRACEBACK, f"{type(o.exc).__name__}: {msg[:300]}"
+            if case.expect == CLEAR and case.words.lower() in msg.lower():
+                return CLEAR, msg
+            return UNCLEAR, f"{type(o.exc).__name__}: {msg[:300]}"
+        if case.expect == CORRECT and (case.check is None or case.check(o, None)):
+            return CORRECT, ""
+        return WRONG, f"returned {str(o.value)[:200]!r}"
+    if o.exc is not None or "Traceback" in o.err:
+        return TRACEBACK, f"{type(o.exc).__name__}: {o.exc}" if o.exc else o.err[-300:]
+    lines = [ln for ln in o.err.splitlines() if ln.strip()]
+    if o.rc != 0:
+        one = len(lines) == 1 and lines[0].startswith("motionbits") and "error" in lines[0]
+        if (case.expect == CLEAR and one and o.rc == case.rc
+                and case.words.lower() in lines[0].lower()):
+            return CLEAR, lines[0]
+        return UNCLEAR, f"rc {o.rc}: {o.err[-300:]!r}"
+    if case.expect == CORRECT and (case.check is None or case.check(o, None)):
+        return CORRECT, ""
+    return WRONG, f"rc 0: {o.out[-200:]!r} {o.err[-200:]!r}"
+
+
+def run_case(case: Case, tmp: Path) -> tuple[str, str, Outcome | None]:
+    def alarm(*_):
+        raise Hang()
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, case.limit)
+    try:
+        o = case.run(tmp)
+    except Hang:
+        return HANG, f"no answer in {case.limit:g} s", None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    if case.check is not None and o.exc is None:
+        ok = case.check
+        case = Case(case.id, case.run, case.expect, case.words, lambda o_, _: ok(o_, tmp),
+                    case.absent, case.rc, case.limit, case.requires)
+    return (*verdict(case, o), o)
+
+
+# --------------------------------------------------------------------------- checks
+
+def labels_in(out: Path) -> list[str]:
+    return sorted(p.name for p in (out / "labels").glob("*.png"))
+
+
+def seg_ok(n: int, out: str = "out") -> Callable[[Outcome, Path], bool]:
+    """segment wrote n label maps, an overlay and a summary, and said so."""
+    def check(o: Outcome, tmp: Path) -> bool:
+        d = tmp / out
+        summary = json.loads((d / "summary.json").read_text())
+        return (len(labels_in(d)) == n == summary["frames"]
+                and (d / "overlay.mp4").stat().st_size > 0 and "wrote" in o.out)
+    return check
+
+
+def same_labels_as(reference: str) -> Callable[[Outcome, Path], bool]:
+    """The run's labels equal those of the 8-bit frames in assets/``reference`` (so the
+    16-bit frames were scaled, not clipped), and something was found."""
+    def check(o: Outcome, tmp: Path) -> bool:
+        from motionbits.cli import main
+
+        with contextlib.redirect_stdout(io.StringIO()):
+            main(["segment", str(tmp.parent / "assets" / reference), "--out", str(tmp / "ref"), *SEG_BIG])
+        a, b = ([cv2.imread(str(p), cv2.IMREAD_UNCHANGED) for p in sorted((tmp / d / "labels").glob("*.png"))]
+                for d in ("out", "ref"))
+        return len(a) == len(b) == 4 and all(np.array_equal(x, y) for x, y in zip(a, b)) and a[-1].max() > 0
+    return check
+
+
+def prepared(setup: Callable[[Path], None], runner: Callable[[Path], Outcome]):
+    """Run ``setup(tmp)`` (e.g. an earlier output) before the case itself."""
+    def run(tmp: Path) -> Outcome:
+        setup(tmp)
+        return runner(tmp)
+    return run
+
+
+def earlier_output(tmp: Path) -> None:
+    from motionbits.cli import main
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["segment", str(tmp.parent / "assets" / "frames"), "--out", str(tmp / "out"), *SEG]) == 0
+
+
+def unrelated_files(tmp: Path) -> None:
+    (tmp / "out").mkdir(parents=True)
+    (tmp / "out" / "thesis.tex").write_text("precious")
+
+
+def robot_track_with_thesis(tmp: Path) -> None:
+    unrelated_files(tmp / "d" / "robot")  # d/robot/out/thesis.tex
+
+
+def a_file(name: str) -> Callable[[Path], None]:
+    return lambda tmp: (tmp / name).write_text("a file")
+
+
+def fail_nth(target: str, n: int, exc: BaseException | None = None, result: Any = None):
+    """A patch: ``target`` works n times, then raises ``exc`` (or returns ``result``)."""
+    def factory():
+        import importlib
+
+        parts = target.split(".")
+        for i in range(len(parts) - 1, 0, -1):  # the longest importable prefix is the module
+            try:
+                owner = importlib.import_module(".".join(parts[:i]))
+                break
+            except ImportError:
+                continue
+        for name in parts[i:-1]:
+            owner = getattr(owner, name)
+        attr = parts[-1]
+        orig = getattr(owner, attr)
+        calls = {"n": 0}
+
+        def wrapper(*a, **k):
+            calls["n"] += 1
+            if calls["n"] > n:
+                if exc is not None:
+                    raise exc
+                return result
+            return orig(*a, **k)
+        return mock.patch.object(owner, attr, wrapper)
+    return factory
+
+
+def without(module: str):
+    """A patch: ``import module`` fails as if the package were not installed."""
+    return lambda: mock.patch.dict(sys.modules, {module: None})
+
+
+def no_torch_ops():
+    return mock.patch.dict(sys.modules, {"torch": None, "motionbits.torch_ops": None})
+
+
+def mujoco_renders() -> str | None:
+    try:
+        from motionbits.synth.mujoco_backend import render_check
+    except ImportError as exc:
+        return str(exc)
+    return render_check()
+
+
+def rerun_as_prediction(tmp: Path) -> None:
+    """A 6-frame segment output replaced by a 1-frame one (whose labels are all background)
+    at the place where ``eval`` looks for the prediction of scene_0000."""
+    from motionbits.cli import main
+
+    out = str(tmp / "pred" / "robot" / "scene_0000")
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["segment", str(tmp.parent / "assets" / "frames"), "--out", out, *SEG]) == 0
+        assert main(["segment", str(tmp.parent / "assets" / "one"), "--out", out, "--overwrite", *SEG]) == 0
+
+
+def eval_json_f1(value: float) -> Callable[[Outcome, Path], bool]:
+    def check(o: Outcome, tmp: Path) -> bool:
+        scores = json.loads((tmp / "s.json").read_text())
+        return math.isclose(scores["macro"]["F1"], value)
+    return check
+
+
+# --------------------------------------------------------------------------- API helpers
+
+def _segment(frames, config=None, flow=None):
+    from motionbits import MotionBitsSegmenter
+
+    seg = MotionBitsSegmenter(config, flow=flow)
+    return [seg.update(f) for f in frames]
+
+
+def _work_size(shape, config):
+    """(labels shape, working size) after one frame of ``shape``."""
+    from motionbits import MotionBitsSegmenter
+
+    seg = MotionBitsSegmenter(config)
+    res = seg.update(np.zeros((*shape, 3), np.uint8))
+    return res.labels.shape, seg._work_size
+
+
+def _small_config(**kw):
+    from motionbits import MotionBitsConfig
+
+    return MotionBitsConfig(n_nodes=400, max_side=160, **kw)
+
+
+def _flow_returning(fn):
+    def flow(prev, nxt):
+        return fn(prev)
+    return flow
+
+
+def _many_ids(n: int, shape=(300, 300), seed=0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    lab = np.zeros(shape, np.int64)
+    lab.ravel()[:n] = rng.permutation(n) + 1
+    return lab
+
+
+def _eval_many(n: int, shape):
+    from motionbits.eval import evaluate_frame
+
+    gt = _many_ids(n, shape)
+    perm = np.r_[0, np.random.default_rng(1).permutation(n) + 1]
+    return evaluate_frame(perm[gt], gt)  # the same objects, other ids: all matched, F1 = 1
+
+
+def _config(**kw):
+    from motionbits import MotionBitsConfig
+
+    return MotionBitsConfig(**kw)
+
+
+def _adapter_frame(frame):
+    from vlm_adapters.base import to_rgb_frames
+
+    return to_rgb_frames([frame])[0]
+
+
+def _stub_generate(frames):
+    from vlm_adapters.stub import StubVLM
+
+    return StubVLM(["ok"]).generate(frames, "what moved?")
+
+
+def _phrases(text, **kw):
+    from vlm_adapters.phrases import phrases_from_answer
+
+    return phrases_from_answer(text, **kw)
+
+
+def _parse(text, labels=None, **kw):
+    from somprompt import parse_answer
+
+    return parse_answer(text, labels=labels, **kw)
+
+
+def _draw(labels, shape=None, scene=None, **kw):
+    from somprompt import SetOfMarkRenderer
+
+    shape = shape or labels.shape
+    scene = np.zeros((*shape, 3), np.uint8) if scene is None else scene
+    return SetOfMarkRenderer(**kw).render(scene, labels)
+
+
+_GRAD16 = (np.arange(64 * 64, dtype=np.uint32).reshape(64, 64) * 16).astype(np.uint16)
+_F = _clip(3).frames  # three 120x160 frames for API cases
+_LAB = np.zeros((20, 20), np.int64)
+_LAB[2:8, 2:8] = 3
+_LAB[10:18, 10:18] = 5
+
+
+# --------------------------------------------------------------------------- the table
+
+S = "segment"
+CASES: list[Case] = [
+    # ---- segment: inputs
+    Case("segment/nonexistent", cli(S, "{t}/no/such.mp4", "--out", "{t}/out"), CLEAR, "not found", absent=("out",)),
+    Case("segment/empty-file", cli(S, "{a}/empty.mp4", "--out", "{t}/out"), CLEAR, "empty.mp4", absent=("out",)),
+    Case("segment/text-as-mp4", cli(S, "{a}/text.mp4", "--out", "{t}/out"), CLEAR, "could not open", absent=("out",)),
+    Case("segment/dev-zero", cli(S, "/dev/zero", "--out", "{t}/out"), CLEAR, "/dev/zero", absent=("out",)),
+    Case("segment/empty-folder", cli(S, "{a}/empty_dir", "--out", "{t}/out"), CLEAR, "contains no images", absent=("out",)),
+    Case("segment/folder-of-txt", cli(S, "{a}/txt_dir", "--out", "{t}/out"), CLEAR, "contains no images", absent=("out",)),
+    Case("segment/mixed-sizes", cli(S, "{a}/mixed", "--out", "{t}/out", *SEG), CLEAR, "started at", absent=("out",)),
+    Case("segment/corrupt-png-among-good", cli(S, "{a}/corrupt", "--out", "{t}/out", *SEG), CLEAR, "00002.png", absent=("out",)),
+    Case("segment/truncated-video-warns", cli(S, "{a}/cut.avi", "--out", "{t}/out", *SEG), CORRECT,
+         check=lambda o, t: ("header says 20 frames" in o.err and json.loads(
+             (t / "out/summary.json").read_text())["input_frames"] == {"expected": 20, "decoded": 10})),
+    Case("segment/truncated-video-strict", cli(S, "{a}/cut.avi", "--out", "{t}/out", "--strict", *SEG), CLEAR,
+         "only 10 could be decoded", absent=("out",)),
+    Case("segment/16bit-grey-pngs", cli(S, "{a}/grey16", "--out", "{t}/out", *SEG_BIG), CORRECT, check=same_labels_as("grey8")),
+    Case("segment/16bit-rgb-pngs", cli(S, "{a}/rgb16", "--out", "{t}/out", *SEG_BIG), CORRECT, check=same_labels_as("rgb8")),
+    Case("segment/float-tiff-out-of-range", cli(S, "{a}/float_big", "--out", "{t}/out", *SEG), CLEAR, "outside [0, 1]", absent=("out",)),
+    Case("segment/float-tiff-nan", cli(S, "{a}/float_nan", "--out", "{t}/out", *SEG), CLEAR, "NaN", absent=("out",)),
+    Case("segment/8x4000-frame", cli(S, "{a}/thin", "--out", "{t}/out", *SEG), CLEAR, "at least 20 px", absent=("out",)),
+    Case("segment/8x8-frame", cli(S, "{a}/tiny", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(2)),  # upsampled
+    Case("segment/rgba-pngs", cli(S, "{a}/rgba", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(6)),
+    Case("segment/palette-pngs", cli(S, "{a}/palette", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(6)),
+    Case("segment/grey-pngs", cli(S, "{a}/grey8", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(4)),
+    Case("segment/one-frame", cli(S, "{a}/one", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
+    Case("segment/single-image-file", cli(S, "{a}/frames/00000.png", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
+    Case("segment/unicode-paths", cli(S, "{a}/ünï cødé", "--out", "{t}/ôut put", *SEG), CORRECT, check=seg_ok(3, "ôut put")),
+    Case("segment/folder", cli(S, "{a}/frames", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(6)),
+    Case("segment/video", cli(S, "{a}/clip.mp4", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(6)),
+    Case("segment/window", cli(S, "{a}/frames", "--out", "{t}/out", "--start", "1", "--every", "2", "--frames", "2", *SEG),
+         CORRECT, check=lambda o, t: labels_in(t / "out") == ["00001.png", "00003.png"]),
+    Case("segment/frames-beyond-end", cli(S, "{a}/frames", "--out", "{t}/out", "--frames", "50", *SEG), CORRECT, check=seg_ok(6)),
+    Case("segment/nested-new-out", cli(S, "{a}/one", "--out", "{t}/a/b/c", *SEG), CORRECT, check=seg_ok(1, "a/b/c")),
+    # ---- segment: options (checked before any frame)
+    Case("segment/every-0", cli(S, "{a}/frames", "--out", "{t}/out", "--every", "0"), CLEAR, "--every", absent=("out",)),
+    Case("segment/every-negative", cli(S, "{a}/frames", "--out", "{t}/out", "--every", "-2"), CLEAR, "--every", absent=("out",)),
+    Case("segment/frames-0", cli(S, "{a}/frames", "--out", "{t}/out", "--frames", "0"), CLEAR, "--frames", absent=("out",)),
+    Case("segment/start-negative", cli(S, "{a}/frames", "--out", "{t}/out", "--start", "-1"), CLEAR, "--start", absent=("out",)),
+    Case("segment/start-past-end", cli(S, "{a}/frames", "--out", "{t}/out", "--start", "6"), CLEAR, "past the last frame", absent=("out",)),
+    Case("segment/start-past-end-video", cli(S, "{a}/clip.mp4", "--out", "{t}/out", "--start", "99"), CLEAR, "past the last frame", absent=("out",)),
+    Case("segment/nodes-0", cli(S, "{a}/frames", "--out", "{t}/out", "--nodes", "0"), CLEAR, "--nodes", absent=("out",)),
+    Case("segment/nodes-huge", cli(S, "{a}/frames", "--out", "{t}/out", "--nodes", "999999999"), CLEAR, "--nodes", absent=("out",)),
+    Case("segment/nodes-text", cli(S, "{a}/frames", "--out", "{t}/out", "--nodes", "many"), CLEAR, "--nodes", absent=("out",)),
+    Case("segment/max-side-0", cli(S, "{a}/frames", "--out", "{t}/out", "--max-side", "0"), CLEAR, "--max-side", absent=("out",)),
+    Case("segment/max-side-huge", cli(S, "{a}/frames", "--out", "{t}/out", "--max-side", "100000"), CLEAR, "--max-side", absent=("out",)),
+    Case("segment/fps-0", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "0"), CLEAR, "--fps", absent=("out",)),
+    Case("segment/fps-negative", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "-5"), CLEAR, "--fps", absent=("out",)),
+    Case("segment/fps-nan", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "nan"), CLEAR, "--fps", absent=("out",)),
+    Case("segment/fps-inf", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "inf"), CLEAR, "--fps", absent=("out",)),
+    Case("segment/backend-unknown", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "cuda"), CLEAR, "backend", absent=("out",)),
+    Case("segment/backend-torch-without-torch", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "torch",
+                                                    patches=(no_torch_ops,)), CLEAR, "torch", absent=("out",)),
+    Case("segment/unknown-option", cli(S, "{a}/frames", "--out", "{t}/out", "--nodez", "3"), CLEAR, "unrecognized", absent=("out",)),
+    # ---- segment: outputs
+    Case("segment/out-is-a-file", prepared(a_file("out"), cli(S, "{a}/frames", "--out", "{t}/out")), CLEAR, "is a file"),
+    Case("segment/out-under-a-file", prepared(a_file("f"), cli(S, "{a}/frames", "--out", "{t}/f/out")), CLEAR, "cannot write"),
+    Case("segment/out-not-writable", cli(S, "{a}/frames", "--out", "{t}/out", *SEG, patches=(
+        fail_nth("tempfile.mkdtemp", 0, PermissionError(13, "Permission denied")),)), CLEAR, "permission denied", absent=("out",)),
+    Case("segment/labels-not-writable", cli(S, "{a}/frames", "--out", "{t}/out", *SEG, patches=(
+        fail_nth("cv2.imwrite", 2, result=False),)), CLEAR, "could not write", absent=("out",)),
+    Case("segment/disk-full", cli(S, "{a}/frames", "--out", "{t}/out", *SEG, patches=(
+        fail_nth("cv2.imwrite", 3, OSError(28, "No space left on device")),)), CLEAR, "no space left", absent=("out",)),
+    Case("segment/out-of-memory", cli(S, "{a}/frames", "--out", "{t}/out", *SEG, patches=(
+        fail_nth("motionbits.segmenter.MotionBitsSegmenter.update", 2, MemoryError()),)), CLEAR, "out of memory", absent=("out",)),
+    Case("segment/interrupted", cli(S, "{a}/frames", "--out", "{t}/out", *SEG, patches=(
+        fail_nth("motionbits.segmenter.MotionBitsSegmenter.update", 2, KeyboardInterrupt()),)), CLEAR, "interrupted",
+        absent=("out",), rc=130),
+    Case("segment/rerun-refused", prepared(earlier_output, cli(S, "{a}/one", "--out", "{t}/out", *SEG)), CLEAR,
+         "--overwrite"),
+    Case("segment/rerun-overwrite-fewer-frames", prepared(earlier_output, cli(S, "{a}/one", "--out", "{t}/out", "--overwrite", *SEG)),
+         CORRECT, check=seg_ok(1)),
+    Case("segment/overwrite-unrelated-folder", prepared(unrelated_files, cli(S, "{a}/one", "--out", "{t}/out", "--overwrite", *SEG)),
+         CLEAR, "did not write"),
+    Case("segment/failed-rerun-keeps-old", prepared(earlier_output, cli(S, "{a}/corrupt", "--out", "{t}/out", "--overwrite", *SEG)),
+         CLEAR, "00002.png"),
+    # ---- bench
+    Case("bench/size-too-small", cli("bench", "--size", "16x12"), CLEAR, "--size 16x12 is too small"),
+    Case("bench/size-malformed", cli("bench", "--size", "640"), CLEAR, "WIDTHxHEIGHT"),
+    Case("bench/frames-1", cli("bench", "--frames", "1"), CLEAR, "--frames"),
+    Case("bench/scaling-frames-1", cli("bench", "--scaling-frames", "1"), CLEAR, "--scaling-frames"),
+    Case("bench/nodes-5", cli("bench", "--nodes", "5"), CLEAR, "--nodes"),
+    Case("bench/max-scenes-0", cli("bench", "--max-scenes", "0"), CLEAR, "--max-scenes"),
+    Case("bench/data-missing", cli("bench", "--data", "{t}/nope"), CLEAR, "not found"),
+    Case("bench/backend-torch-without-torch", cli("bench", "--backend", "torch", patches=(no_torch_ops,)), CLEAR, "torch"),
+    Case("bench/small-run", cli("bench", "--frames", "3", "--size", "64x48", "--nodes", "100", "--no-exact", "--no-scaling"),
+         CORRECT, check=lambda o, t: "per frame" in o.out and "3 frames 48x64" in o.out),
+    # ---- eval
+    Case("eval/pred-missing", cli("eval", "--pred", "{t}/nope", "--gt", "{a}/data"), CLEAR, "not found"),
+    Case("eval/gt-missing", cli("eval", "--pred", "{a}/pred", "--gt", "{t}/nope"), CLEAR, "nope"),
+    Case("eval/size-mismatch", cli("eval", "--pred", "{a}/pred_small", "--gt", "{a}/data", "--quiet"), CLEAR, "shape"),
+    Case("eval/json-is-a-folder", prepared(lambda t: (t / "j").mkdir(), cli(
+        "eval", "--pred", "{a}/pred", "--gt", "{a}/data", "--json", "{t}/j")), CLEAR, "is a folder"),
+    Case("eval/duplicate-names", cli("eval", "--pred", "x={a}/pred", "--pred", "x={a}/pred", "--gt", "{a}/data", "--quiet"),
+         CLEAR, "share the name"),
+    Case("eval/no-prediction-for-scene", prepared(lambda t: (t / "p").mkdir(), cli(
+        "eval", "--pred", "{t}/p", "--gt", "{a}/data", "--quiet")), CLEAR, "scene_0000"),
+    Case("eval/perfect", cli("eval", "--pred", "{a}/pred", "--gt", "{a}/data", "--quiet", "--json", "{t}/s.json"),
+         CORRECT, check=eval_json_f1(1.0)),
+    Case("eval/segment-output-latest-run", prepared(rerun_as_prediction, cli(
+        "eval", "--pred", "{t}/pred", "--gt", "{a}/data", "--quiet", "--json", "{t}/s.json")),
+        CORRECT, check=eval_json_f1(0.0)),
+    # ---- synth
+    Case("synth/out-is-a-file", prepared(a_file("s"), cli("synth", "--track", "robot", "--out", "{t}/s")), CLEAR, "is a file"),
+    Case("synth/without-mujoco", cli("synth", "--track", "robot", "--out", "{t}/s", patches=(without("mujoco"),)),
+         CLEAR, "pip install", absent=("s",)),
+    Case("synth/size-too-small", cli("synth", "--track", "robot", "--out", "{t}/s", "--size", "16x16"), CLEAR, "too small", absent=("s",)),
+    Case("synth/scenes-0", cli("synth", "--track", "robot", "--out", "{t}/s", "--scenes", "0"), CLEAR, "--scenes", absent=("s",)),
+    Case("synth/frames-1", cli("synth", "--track", "robot", "--out", "{t}/s", "--frames", "1"), CLEAR, "--frames", absent=("s",)),
+    Case("synth/track-unknown", cli("synth", "--track", "car", "--out", "{t}/s"), CLEAR, "--track", absent=("s",)),
+    Case("synth/track-not-empty", prepared(robot_track_with_thesis, cli(
+        "synth", "--track", "robot", "--out", "{t}/d")), CLEAR, "--overwrite"),
+    Case("synth/overwrite-unrelated", prepared(robot_track_with_thesis, cli(
+        "synth", "--track", "robot", "--out", "{t}/d", "--overwrite")), CLEAR, "did not write"),
+    Case("synth/other-track-kept", prepared(lambda t: (t / "d/hand/scene_0000").mkdir(parents=True), cli(
+        "synth", "--track", "robot", "--out", "{t}/d", "--scenes", "1", "--frames", "3", "--size", "64x48", "--quiet")),
+        CORRECT, check=lambda o, t: (t / "d/hand/scene_0000").is_dir() and (t / "d/robot/scene_0000/gt.png").is_file(),
+        requires=mujoco_renders),
+    # ---- benchmark
+    Case("benchmark/option-int", cli("benchmark", "--data", "{a}/data", "--methods", "motionbits", "--quiet",
+                                     "--option", "motionbits.n_nodes=400", "--option", "motionbits.max_side=160"),
+         CORRECT, check=lambda o, t: "motionbits" in o.out and "robot" in o.out),
+    Case("benchmark/option-bool-bad", cli("benchmark", "--data", "{a}/data", "--methods", "motionbits",
+                                          "--option", "motionbits.exact=maybe"), CLEAR, "true or false"),
+    Case("benchmark/option-int-bad", cli("benchmark", "--data", "{a}/data", "--methods", "motionbits",
+                                         "--option", "motionbits.n_nodes=lots"), CLEAR, "integer"),
+    Case("benchmark/option-range-bad", cli("benchmark", "--data", "{a}/data", "--methods", "motionbits",
+                                           "--option", "motionbits.n_nodes=3"), CLEAR, "n_nodes"),
+    Case("benchmark/option-unknown-field", cli("benchmark", "--data", "{a}/data", "--methods", "motionbits",
+                                               "--option", "motionbits.nodes=3"), CLEAR, "unknown MotionBitsConfig field"),
+    Case("benchmark/option-baseline-bad", cli("benchmark", "--data", "{a}/data", "--methods", "flow-cc",
+                                              "--option", "flow-cc.threshold=high"), CLEAR, "flow-cc"),
+    Case("benchmark/option-baseline-unknown", cli("benchmark", "--data", "{a}/data", "--methods", "flow-cc",
+                                                  "--option", "flow-cc.bogus=1"), CLEAR, "bogus"),
+    Case("benchmark/option-malformed", cli("benchmark", "--data", "{a}/data", "--option", "nonsense"), CLEAR, "METHOD.KEY=VALUE"),
+    Case("benchmark/option-not-in-methods", cli("benchmark", "--data", "{a}/data", "--methods", "flow-cc",
+                                                "--option", "motionbits.exact=true"), CLEAR, "not in --methods"),
+    Case("benchmark/max-scenes-0", cli("benchmark", "--data", "{a}/data", "--max-scenes", "0"), CLEAR, "--max-scenes"),
+    Case("benchmark/max-scenes-negative", cli("benchmark", "--data", "{a}/data", "--max-scenes", "-1"), CLEAR, "--max-scenes"),
+    Case("benchmark/no-data", cli("benchmark"), CLEAR, "--data"),
+    Case("benchmark/data-missing", cli("benchmark", "--data", "{t}/nope", "--methods", "flow-cc"), CLEAR, "nope"),
+    Case("benchmark/data-not-moribo", cli("benchmark", "--data", "{a}/frames", "--methods", "flow-cc"), CLEAR, "no MoRiBo scene"),
+    Case("benchmark/unknown-method", cli("benchmark", "--data", "{a}/data", "--methods", "magic"), CLEAR, "unknown method"),
+    Case("benchmark/json-is-a-folder", prepared(lambda t: (t / "j").mkdir(), cli(
+        "benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--json", "{t}/j")), CLEAR, "is a folder"),
+    Case("benchmark/save-pred-not-empty", prepared(unrelated_files, cli(
+        "benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--save-pred", "{t}/out")), CLEAR, "--overwrite"),
+    Case("benchmark/save-pred", cli("benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--quiet",
+                                    "--save-pred", "{t}/sp"),
+         CORRECT, check=lambda o, t: (t / "sp/flow-cc/robot/scene_0000.png").is_file()),
+    # ---- motionbits API: config
+    Case("api/config-n_nodes-str", api(lambda t: _config(n_nodes="10000")), CLEAR, "n_nodes"),
+    Case("api/config-n_nodes-bool", api(lambda t: _config(n_nodes=True)), CLEAR, "n_nodes"),
+    Case("api/config-n_nodes-float", api(lambda t: _config(n_nodes=100.5)), CLEAR, "n_nodes"),
+    Case("api/config-inflation-nan", api(lambda t: _config(mcl_inflation=float("nan"))), CLEAR, "mcl_inflation"),
+    Case("api/config-exact-str", api(lambda t: _config(exact="false")), CLEAR, "exact"),
+    Case("api/config-max_side-huge", api(lambda t: _config(max_side=100000)), CLEAR, "max_side"),
+    Case("api/config-seed_fraction-0", api(lambda t: _config(seed_fraction=0.0)), CLEAR, "seed_fraction"),
+    Case("api/config-backend-unknown", api(lambda t: _config(backend="cuda")), CLEAR, "backend"),
+    Case("api/config-flow-int", api(lambda t: _config(flow=3)), CLEAR, "flow"),
+    Case("api/config-unknown-field", api(lambda t: _config(nodes=10)), CLEAR, "nodes"),
+    Case("api/config-with-bad", api(lambda t: _config().with_(k_neighbors=0)), CLEAR, "k_neighbors"),
+    Case("api/config-numpy-int", api(lambda t: _config(n_nodes=np.int64(900))), CORRECT,
+         check=lambda o, t: o.value.n_nodes == 900),
+    # ---- motionbits API: frames and flow
+    Case("api/max_side-huge-small-input", api(lambda t: _work_size((120, 160), _config(max_side=16384))),
+         CORRECT, check=lambda o, t: o.value == ((120, 160), (480, 640))),  # up to 640 only
+    Case("api/max_side-huge-large-input", api(lambda t: _work_size((900, 1200), _config(max_side=16384))),
+         CORRECT, check=lambda o, t: o.value == ((900, 1200), (900, 1200))),  # never beyond the input
+    Case("api/max_side-small", api(lambda t: _work_size((120, 160), _config(max_side=80))),
+         CORRECT, check=lambda o, t: o.value == ((120, 160), (60, 80))),
+    Case("api/flow-wrong-shape", api(lambda t: _segment(_F, _small_config(), _flow_returning(
+        lambda p: np.zeros((10, 10, 2), np.float32)))), CLEAR, "flow backend"),
+    Case("api/flow-nan", api(lambda t: _segment(_F, _small_config(), _flow_returning(
+        lambda p: np.full((*p.shape[:2], 2), np.nan, np.float32)))), CLEAR, "NaN"),
+    Case("api/flow-inf", api(lambda t: _segment(_F, _small_config(), _flow_returning(
+        lambda p: np.full((*p.shape[:2], 2), np.inf, np.float32)))), CLEAR, "infinite"),
+    Case("api/flow-returns-list", api(lambda t: _segment(_F, _small_config(), _flow_returning(
+        lambda p: [[0.0, 0.0]]))), CLEAR, "flow backend"),
+    Case("api/flow-float64-ok", api(lambda t: _segment(_F, _small_config(), _flow_returning(
+        lambda p: np.zeros((*p.shape[:2], 2), np.float64)))), CORRECT, check=lambda o, t: len(o.value) == 3),
+    Case("api/frame-8x4000", api(lambda t: _segment([np.zeros((8, 4000, 3), np.uint8)] * 2)), CLEAR, "20 px"),
+    Case("api/frame-nan-float", api(lambda t: _segment([np.full((64, 64, 3), np.nan)])), CLEAR, "uint8"),
+    Case("api/frame-uint16-scaled", api(lambda t: __import__("motionbits.video").video.as_rgb_frame(
+        np.dstack([_GRAD16] * 3))), CORRECT, check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
+    Case("api/frame-wrong-shape", api(lambda t: _segment([np.zeros((64, 64, 2), np.uint8)])), CLEAR, "shape"),
+    Case("api/frame-none", api(lambda t: _segment([None])), CLEAR, "numpy array"),
+    Case("api/size-change", api(lambda t: _segment([_F[0], _F[1][:100]], _small_config())), CLEAR, "call reset()"),
+    Case("api/segment-video-every-0", api(lambda t: list(__import__("motionbits").segment_video(_F, every=0))), CLEAR, "every"),
+    Case("api/iter-frames-int", api(lambda t: list(__import__("motionbits.video").video.iter_frames(123))), CLEAR, "unsupported"),
+    Case("api/read-image-16bit", api(lambda t: (Image.fromarray(_GRAD16).save(t / "g.png"),
+                                               __import__("motionbits.video").video.read_image(t / "g.png"))[1]),
+         CORRECT, check=lambda o, t: o.value.shape == (64, 64, 3) and o.value.max() == round(_GRAD16.max() / 257)
+         and o.value.min() == 0),
+    Case("api/read-image-corrupt", api(lambda t: ((t / "c.png").write_bytes(b"garbage"),
+                                                 __import__("motionbits.video").video.read_image(t / "c.png"))),
+         CLEAR, "could not read image"),
+    # ---- motionbits API: eval
+    Case("eval-api/20000-ids", api(lambda t: _eval_many(20_000, (200, 200))), CORRECT,
+         check=lambda o, t: o.value.n_gt == 20_000 and o.value.f1.min() == 1.0, limit=20),
+    Case("eval-api/shape-mismatch", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        np.zeros((5, 6), int), np.zeros((6, 5), int))), CLEAR, "shape"),
+    Case("eval-api/float-map", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        np.zeros((5, 5), np.float32), np.zeros((5, 5), int))), CLEAR, "integer"),
+    Case("eval-api/negative-labels", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        -np.ones((5, 5), int), np.zeros((5, 5), int))), CLEAR, "negative"),
+    Case("eval-api/huge-ids", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        _LAB * 10**12, _LAB)), CORRECT, check=lambda o, t: o.value.f1.tolist() == [1.0, 1.0]),
+    # ---- somprompt
+    Case("somprompt/draw-70000-ids", api(lambda t: _draw(_many_ids(70_000))), CORRECT,
+         check=lambda o, t: (len(o.value.placements) == 256 and len(o.value.dropped) == 70_000 - 256
+                             and any("69744 of 70000" in w for w in o.warns)), limit=30),
+    Case("somprompt/draw-6400-ids", api(lambda t: _draw(_many_ids(6_400))), CORRECT,
+         check=lambda o, t: len(o.value.placements) == 256, limit=30),
+    Case("somprompt/draw-max-marks-all", api(lambda t: _draw(_LAB, max_marks=None)), CORRECT,
+         check=lambda o, t: sorted(o.value.placements) == [3, 5] and not o.value.dropped),
+    Case("somprompt/max-marks-0", api(lambda t: _draw(_LAB, max_marks=0)), CLEAR, "max_marks"),
+    Case("somprompt/draw-shape-mismatch", api(lambda t: _draw(_LAB, shape=(30, 30))), CLEAR, "labels"),
+    Case("somprompt/draw-float-labels", api(lambda t: _draw(_LAB.astype(np.float32))), CLEAR, "labels"),
+    Case("somprompt/draw-on-16bit-pil", api(lambda t: _draw(np.zeros((64, 64), np.int64), scene=Image.fromarray(_GRAD16))),
+         CORRECT, check=lambda o, t: np.asarray(o.value.image).max() == round(_GRAD16.max() / 257)),
+    Case("somprompt/parse-huge-mark", api(lambda t: _parse("It is [999999999999] and [3].", _LAB)), CORRECT,
+         check=lambda o, t: o.value.ids == [3] and o.value.unknown == ["999999999999"]),
+    Case("somprompt/parse-5-digit-list", api(lambda t: _parse("objects 3, 12345 and 5", _LAB)), CORRECT,
+         check=lambda o, t: o.value.ids == [3, 5] and o.value.unknown == ["12345"]),
+    Case("somprompt/parse-none", api(lambda t: _parse(None)), CLEAR, "str"),
+    Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
+         check=lambda o, t: o.value.ids == [3]),
+    Case("somprompt/parse-unicode", api(lambda t: _parse("Der Becher [5] — 移动了 ✓", _LAB)), CORRECT,
+         check=lambda o, t: o.value.ids == [5]),
+    # ---- vlm_adapters
+    Case("vlm/generate-none", api(lambda t: _stub_generate(None)), CLEAR, "frames must be"),
+    Case("vlm/generate-string", api(lambda t: _stub_generate("video.mp4")), CLEAR, "frames must be"),
+    Case("vlm/phrases-none", api(lambda t: _phrases(None)), CLEAR, "no answer"),
+    Case("vlm/max-phrases-negative", api(lambda t: _phrases("a red cup, a blue box", max_phrases=-1)), CLEAR, "max_phrases"),
+    Case("vlm/max-phrases-0", api(lambda t: _phrases("a red cup", max_phrases=0)), CLEAR, "max_phrases"),
+    Case("vlm/frame-uint16-scaled", api(lambda t: _adapter_frame(np.dstack([_GRAD16] * 3))), CORRECT,
+         check=lambda o, t: abs(float(o.value.mean()) - float(_GRAD16.mean()) / 257) < 1),
+    Case("vlm/frame-float-nan", api(lambda t: _adapter_frame(np.full((8, 8, 3), np.nan))), CLEAR, "uint8"),
+    Case("vlm/frame-float-out-of-range", api(lambda t: _adapter_frame(np.full((8, 8, 3), 7.0))), CLEAR, "uint8"),
+    Case("vlm/frame-float-refused", api(lambda t: _adapter_frame(np.full((8, 8, 3), 0.5))), CLEAR, "np.clip"),
+    Case("vlm/frame-0x0", api(lambda t: _adapter_frame(np.zeros((0, 0, 3), np.uint8))), CLEAR, "empty"),
+    Case("vlm/frame-pil-16bit", api(lambda t: _adapter_frame(Image.fromarray(_GRAD16))), CORRECT,
+         check=lambda o, t: o.value.shape == (64, 64, 3) and o.value.max() == round(_GRAD16.max() / 257)),
+    Case("vlm/frame-complex", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.complex64))), CLEAR, "uint8"),
+    Case("vlm/frame-int32", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.int32))), CLEAR, "uint8"),
+    Case("vlm/frames-empty", api(lambda t: _stub_generate([])), CLEAR, "empty"),
+]
+# --------------------------------------------------------------------------- tests
+
+@pytest.fixture
+def tmp(tmp_path: Path, assets: Path) -> Path:
+    """A fresh folder per case, next to the assets (``{a}`` = ../assets)."""
+    link = tmp_path.parent / "assets"
+    if not link.exists():
+        link.symlink_to(assets)
+    return tmp_path
+
+
+def _leftovers(tmp: Path) -> list[str]:
+    return [str(p.relative_to(tmp)) for p in tmp.rglob("*") if ".partial-" in p.name]
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+def test_case(case: Case, tmp: Path) -> None:
+    reason = case.requires() if case.requires is not None else None
+    if reason:
+        pytest.skip(reason)
+    got, why, o = run_case(case, tmp)
+    assert got == case.expect, f"{case.id}: {got}: {why}"
+    assert not _leftovers(tmp), f"partial output left: {_leftovers(tmp)}"
+    for rel in case.absent:
+        assert not (tmp / rel).exists(), f"{rel} was written although the command failed"
+    if case.id in ("segment/rerun-refused", "segment/failed-rerun-keeps-old"):
+        assert labels_in(tmp / "out") == [f"{i:05d}.png" for i in range(6)]  # untouched
+
+
+def test_debug_shows_the_traceback(tmp: Path) -> None:
+    from motionbits.cli import main
+
+    with pytest.raises(FileNotFoundError):
+        main(["segment", str(tmp / "nope.mp4"), "--debug"])
+    with pytest.raises(FileNotFoundError):
+        main(["--debug", "segment", str(tmp / "nope.mp4")])
+
+
+def test_sparse_matching_equals_dense() -> None:
+    """The sparse path finds a matching of the same total score as the dense one."""
+    from motionbits.eval import matching
+
+    rng = np.random.default_rng(0)
+    for trial in range(40):
+        k, m = rng.integers(1, 25, 2)
+        n = int(rng.integers(1, k * m + 1))
+        idx = rng.choice(k * m, n, replace=False)
+        r, c = np.divmod(idx, m)
+        s = rng.random(n) + 0.01 if trial % 2 else np.round(rng.random(n), 1) + 0.1
+        dense = np.zeros((k, m))
+        dense[r, c] = s
+        best = dense[matching.hungarian_match(dense)].sum()
+        with mock.patch.object(matching, "DENSE_MATCH_CELLS", 0):
+            rows, cols = matching.sparse_hungarian_match(k, m, r, c, s)
+        assert len(set(rows)) == len(rows) and len(set(cols)) == len(cols)
+        assert np.isclose(dense[rows, cols].sum(), best)
+        rows, cols = matching._augmented_match(k, m, r, c, s)
+        assert np.isclose(dense[rows, cols].sum(), best)
+
+
+def report(cases: list[Case] = CASES, isolate: bool = False) -> dict[str, int]:
+    """Run every case and print its verdict and the counts (``python tests/test_bad_inputs.py``).
+
+    ``isolate``: each case in its own process, killed after its time limit (a hang in
+    native code cannot be interrupted from Python).
+    """
+    import subprocess
+    import tempfile
+
+    counts = dict.fromkeys(VERDICTS, 0)
+    with tempfile.TemporaryDirectory() as d:
+        root = Path(d)
+        build_assets(root / "assets")
+        for i, case in enumerate(cases):
+            tmp = root / f"case{i}"
+            tmp.mkdir()
+            if isolate:
+                try:
+                    p = subprocess.run([sys.executable, __file__, "--one", case.id, str(tmp)],
+                                       capture_output=True, text=True, timeout=case.limit + 30)
+                    got, _, why = p.stdout.strip().splitlines()[-1].partition("\t")
+                    if got not in VERDICTS:
+                        got, why = TRACEBACK, p.stderr[-300:]
+                except subprocess.TimeoutExpired:
+                    got, why = HANG, f"killed after {case.limit + 30:g} s"
+                except IndexError:
+                    got, why = TRACEBACK, p.stderr[-300:]
+            else:
+                got, why = _judge(case, tmp)
+            counts[got] += 1
+            print(f"{case.id:<44} {got:<15} {'' if got == case.expect else why[:150]}", flush=True)
+    print(f"{len(cases)} cases: " + ", ".join(f"{v} {n}" for v, n in counts.items()))
+    return counts
+
+
+def _judge(case: Case, tmp: Path) -> tuple[str, str]:
+    got, why, _ = run_case(case, tmp)
+    left = _leftovers(tmp) + [rel for rel in case.absent if (tmp / rel).exists()]
+    if got == case.expect and left:
+        return WRONG, f"partial or stale output left: {left}"
+    return got, why
+
+
+if __name__ == "__main__":  # python tests/test_bad_inputs.py [--isolate] [--skip CASE_ID ...]
+    if "--one" in sys.argv:  # internal: one case in this process, for --isolate
+        case_id, tmp_dir = sys.argv[sys.argv.index("--one") + 1:][:2]
+        got, why = _judge(next(c for c in CASES if c.id == case_id), Path(tmp_dir))
+        print(f"{got}\t{' '.join(why.split())}")
+        sys.exit(0)
+    skip = set(sys.argv[sys.argv.index("--skip") + 1:]) if "--skip" in sys.argv else set()
+    report([c for c in CASES if c.id not in skip], isolate="--isolate" in sys.argv)

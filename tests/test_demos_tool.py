@@ -1,0 +1,132 @@
+"""The agent tool (demos.tool): JSON contents checked against the masks and the generated
+clip's known motions, argument checks, the OpenAI schema, and the VLM choice."""
+
+from __future__ import annotations
+
+import inspect
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("av")
+pytest.importorskip("pycocotools")
+
+from pycocotools import mask as coco_mask  # noqa: E402
+
+from demos import VLMError, ask_about_motion, make_vlm, openai_tools, segment_moving_bodies  # noqa: E402
+from demos.media import write_demo_clip  # noqa: E402
+from demos.segmentation import segment_window  # noqa: E402
+from demos.tool import answer_question  # noqa: E402
+from motionbits import grasp_from_mask  # noqa: E402
+from motionbits.video_writer import write_h264  # noqa: E402
+
+N_FRAMES, SIZE, NODES = 8, (240, 320), 900
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory) -> str:
+    return str(write_demo_clip(tmp_path_factory.mktemp("tool") / "clip.mp4", n_frames=N_FRAMES, size=SIZE))
+
+
+@pytest.fixture(scope="module")
+def result(clip, tmp_path_factory) -> dict:
+    marked = tmp_path_factory.mktemp("marked") / "marked.png"
+    return segment_moving_bodies(clip, n_nodes=NODES, marked_image=marked)
+
+
+def test_result_is_json_and_masks_agree(result):
+    again = json.loads(json.dumps(result))
+    assert again == result
+    assert result["frame_indices"] == list(range(N_FRAMES)) and result["size"] == list(SIZE)
+    bodies = result["motionbits"]
+    assert len(bodies) >= 4
+    for b in bodies:
+        m = coco_mask.decode({"size": b["mask"]["size"], "counts": b["mask"]["counts"].encode()}).astype(bool)
+        g = grasp_from_mask(m)
+        assert m.sum() == b["area"]
+        assert b["grasp"]["center"] == pytest.approx(list(g.centroid), abs=0.01)
+        assert b["grasp"]["angle"] == pytest.approx(g.angle, abs=1e-4)
+        assert b["grasp"]["width"] == pytest.approx(g.width, abs=0.01)
+        # the closing direction is perpendicular to the major axis
+        assert abs(np.dot(b["principal_axes"]["major"], b["principal_axes"]["minor"])) < 1e-3
+    assert [b["area"] for b in bodies] == sorted((b["area"] for b in bodies), reverse=True)
+    assert result["marked_image"].endswith("marked.png")
+
+
+def test_twist_of_the_translating_quad(result):
+    """demo_clip's quad translates by (-2.5, 1.5) px/frame at 640x480, i.e. (-1.25, 0.75) here."""
+    start = np.array([470.0, 105.0]) * 0.5  # its centre at frame 0, scaled to 320x240
+    expected = start + (N_FRAMES - 1) * np.array([-1.25, 0.75])
+    quad = min(result["motionbits"], key=lambda b: np.hypot(*(np.array(b["centroid"]) - expected)))
+    assert np.hypot(*(np.array(quad["centroid"]) - expected)) < 6
+    assert quad["twist"]["vx"] == pytest.approx(-1.25, abs=0.35)
+    assert quad["twist"]["vy"] == pytest.approx(0.75, abs=0.35)
+    assert abs(quad["twist"]["omega"]) < 0.01
+    # it moves in every frame: once found, it is reported moving up to the last frame
+    moved = quad["moved_frames"]
+    assert len(moved) >= N_FRAMES - 3 and moved == list(range(moved[0], N_FRAMES))
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"every": 0}, "every must be >= 1"),
+    ({"frames": 1}, "frames must be >= 2"),
+    ({"n_nodes": "many"}, "n_nodes must be an integer"),
+    ({"start": 100}, "need at least 2 frames"),
+    ({"marked_image": "/nonexistent/dir/x.png"}, "does not exist"),
+    ({"marked_image": "x.gif"}, "must end in .png or .jpg"),
+])
+def test_bad_arguments(clip, kwargs, words):
+    with pytest.raises((ValueError, FileNotFoundError), match=words):
+        segment_moving_bodies(clip, **{"n_nodes": 100, "frames": 2, **kwargs})
+
+
+def test_bad_videos(tmp_path):
+    text = tmp_path / "notes.txt"
+    text.write_text("not a video")
+    with pytest.raises(ValueError, match="could not open"):
+        segment_moving_bodies(str(text))
+    with pytest.raises(FileNotFoundError, match="not found"):
+        segment_moving_bodies(str(tmp_path / "missing.mp4"))
+    one = write_h264([np.full((64, 64, 3), 90, np.uint8)], tmp_path / "one.mp4")
+    with pytest.raises(ValueError, match="at least 2 frames"):
+        segment_moving_bodies(str(one))
+    with pytest.raises(ValueError, match="question must be a non-empty"):
+        ask_about_motion(str(one), "  ")
+
+
+def test_openai_schema_matches_the_functions():
+    tools = {t["function"]["name"]: t["function"] for t in openai_tools()}
+    for fn in (segment_moving_bodies, ask_about_motion):
+        params = inspect.signature(fn).parameters
+        schema = tools[fn.__name__]["parameters"]
+        assert set(schema["properties"]) == set(params) - {"vlm"}  # the VLM is the server's choice
+        assert set(schema["required"]) == {n for n, p in params.items() if p.default is p.empty}
+        for name, prop in schema["properties"].items():
+            if "default" in prop:
+                assert prop["default"] == params[name].default, name
+
+
+def test_vlm_choice_errors(tmp_path, clip):
+    with pytest.raises(VLMError, match="cannot read VLM spec"):
+        make_vlm("nonsense")
+    with pytest.raises(VLMError, match="not a transformers model folder"):
+        make_vlm(str(tmp_path))
+    with pytest.raises(VLMError, match="could not load"):
+        make_vlm("qwen2.5-vl:" + str(tmp_path / "no-such-model"))
+    seg = segment_window(clip, frames=3, n_nodes=100)
+    down = make_vlm("openai:http://127.0.0.1:9/v1@some-model", timeout=5)  # nothing listens on port 9
+    with pytest.raises(VLMError, match="did not answer"):
+        answer_question(seg, "What moved?", down)
+    scripted = answer_question(seg, "What moved?", "stub:Nothing, really.")
+    assert scripted.answer == "Nothing, really." and scripted.cited_ids == []
+
+
+def test_window_memory_limit(clip, monkeypatch):
+    import demos.segmentation
+
+    monkeypatch.setattr(demos.segmentation, "MAX_WINDOW_PIXELS", 3 * SIZE[0] * SIZE[1])
+    with pytest.raises(ValueError, match="at most 3 frames of this size"):
+        segment_moving_bodies(clip, frames=5, n_nodes=100)
+    with pytest.raises(ValueError, match="more than 3 frames of 320x240"):
+        segment_moving_bodies(clip, n_nodes=100)
