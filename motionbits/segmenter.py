@@ -30,8 +30,9 @@ from motionbits.graph import (
     twist_edge_weights,
 )
 from motionbits.identity import identify_clusters
-from motionbits.masks import SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks
-from motionbits.merging import MotionBitGroups, observe_touching
+from motionbits.masks import (
+    SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks, split_stopped)
+from motionbits.merging import MotionBitGroups, observe_touching, stillness_visible
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
@@ -39,7 +40,8 @@ from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids)
 from motionbits.retirement import Origin, retire
 from motionbits.temporal import TemporalState
-from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
+from motionbits.twists import (
+    fit_local_motions, nodes_to_fit, refine_moving_motions, rigid_matrix)
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
@@ -49,6 +51,13 @@ MIN_WORK_SIDE = 20
 #: Smaller inputs are upsampled to at most this longest side (the paper's 640x480, where
 #: the pixel parameters hold); ``max_side`` never upsamples beyond max(input, this).
 REFERENCE_SIDE = 640
+
+#: a MotionBit is shown only if its mask covers this many grid cells (about 120 px at 640x480)
+MIN_SHOWN_CELLS = 4
+
+#: a piece left behind by a moving MotionBit becomes a MotionBit of its own from this many
+#: grid cells up (a block set down by the hand that carried it)
+SPLIT_CELLS = 12
 
 #: Stage names of the per-frame timing report, in pipeline order.
 STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "merging",
@@ -303,6 +312,7 @@ class MotionBitsSegmenter:
                                                 cfg.ransac_threshold)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
+            carried_earned = earned
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
@@ -310,6 +320,10 @@ class MotionBitsSegmenter:
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(SPECK_CELLS * cw * ch)))
+            if cam is None:  # under a moving camera, parallax leaves pieces behind too
+                labels = self._split_stopped(labels, prior, prior_valid & carried_earned, ids,
+                                             thetas, trans, cur_g,
+                                             int(np.ceil(SPLIT_CELLS * cw * ch)))
 
         with self._stage("merging"):
             moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
@@ -323,7 +337,14 @@ class MotionBitsSegmenter:
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown
             shown = {r for i, r in rep.items() if i not in self._tentative}
-            rep = {i: r if r in shown else 0 for i, r in rep.items()}
+            # ... and covers at least MIN_SHOWN_CELLS grid cells (smaller ones are flow noise)
+            area = np.bincount(labels.ravel())
+            group_area: dict[int, int] = {}
+            for i, r in rep.items():
+                group_area[r] = group_area.get(r, 0) + int(area[i])
+            min_area = MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1]
+            rep = {i: r if r in shown and group_area[r] >= min_area else 0
+                   for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
@@ -338,6 +359,22 @@ class MotionBitsSegmenter:
                                   moving, rep, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
         return result
+
+    def _split_stopped(self, labels, prior, held, ids, thetas, trans, cur_gray, min_area):
+        """Parts of moving MotionBits that stopped, as MotionBits of their own
+        (:func:`motionbits.masks.split_stopped`), kept only where standing still shows: the
+        MotionBit's motion would have visibly moved the piece's image. Each differs from the
+        MotionBit it left and has moved as long as it did."""
+        labels, split = split_stopped(labels, prior, held, ids, self._next_id, min_area)
+        motion_of = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
+        for new, old in split.items():
+            if stillness_visible(labels, new, motion_of[old], cur_gray) <= self.config.merge_disagree:
+                labels[labels == new] = 0
+                continue
+            self._groups.forbid(new, [old])
+            self._spans.inherit(new, old, self.frame_index - 1)
+        self._next_id += len(split)
+        return labels
 
     @property
     def _dtype(self) -> type:
