@@ -16,7 +16,7 @@ from scipy import ndimage
 from motionbits.nodes import NodeGrid
 from motionbits.twists import kabsch_2d
 
-__all__ = ["split_stopped", "fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "SPECK_CELLS"]
+__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "SPECK_CELLS"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -224,36 +224,3 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
             out[box][np.isin(comp, small)] = 0
     return out
 
-
-def split_stopped(label_map: np.ndarray, prior: np.ndarray, held: np.ndarray, moving: np.ndarray,
-                  next_id: int, min_area: int) -> tuple[np.ndarray, dict[int, int]]:
-    """New MotionBits for the parts of moving MotionBits that stopped.
-
-    A pixel that carried MotionBit ``k`` (``prior``, trustworthy and with evidence: ``held``)
-    and is background now although ``k`` still has a motion (``moving``) was left behind by
-    it: a hand let go of a block. Each connected piece of at least ``min_area`` px becomes
-    a new MotionBit, numbered from ``next_id``.
-
-    Args:
-        label_map: (H, W) int32 labels of this frame.
-        prior: (H, W) int32 last frame's labels carried to this frame.
-        held: (H, W) bool where ``prior`` is trustworthy and earned.
-        moving: (K,) ids that have a motion this frame.
-        next_id: first free id.
-        min_area: px.
-
-    Returns:
-        the (H, W) int32 label map and {new id: the id it split from}.
-    """
-    left = held & (label_map == 0) & (prior > 0) & np.isin(prior, moving)
-    if left.sum() < min_area:
-        return label_map, {}
-    out = label_map.copy()
-    split: dict[int, int] = {}
-    _, comp, stats, _ = cv2.connectedComponentsWithStats(left.astype(np.uint8), connectivity=8)
-    for c in np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area) + 1:
-        piece = comp == c
-        new = next_id + len(split)
-        split[new] = int(np.bincount(prior[piece]).argmax())
-        out[piece] = new
-    return out, split

@@ -68,10 +68,6 @@ class MotionSpans:
             self.first.setdefault(int(i), frame_index)
             self.last[int(i)] = frame_index
 
-    def inherit(self, new: int, old: int, last: int) -> None:
-        """``new`` split off ``old``: it moved from ``old``'s first frame until ``last``."""
-        self.first[int(new)] = self.first.get(int(old), last)
-        self.last[int(new)] = last
 
 
 def moving_ids(points: np.ndarray, node_ids: np.ndarray, ids: np.ndarray, thetas: np.ndarray,

@@ -30,9 +30,8 @@ from motionbits.graph import (
     twist_edge_weights,
 )
 from motionbits.identity import identify_clusters
-from motionbits.masks import (
-    SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks, split_stopped)
-from motionbits.merging import MotionBitGroups, observe_touching, stillness_visible
+from motionbits.masks import SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks
+from motionbits.merging import MotionBitGroups, observe_touching
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
@@ -40,8 +39,7 @@ from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids)
 from motionbits.retirement import Origin, retire
 from motionbits.temporal import TemporalState
-from motionbits.twists import (
-    fit_local_motions, nodes_to_fit, refine_moving_motions, rigid_matrix)
+from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
@@ -54,10 +52,6 @@ REFERENCE_SIDE = 640
 
 #: a MotionBit is shown only if its mask covers this many grid cells (about 120 px at 640x480)
 MIN_SHOWN_CELLS = 4
-
-#: a piece left behind by a moving MotionBit becomes a MotionBit of its own from this many
-#: grid cells up (a block set down by the hand that carried it)
-SPLIT_CELLS = 12
 
 #: Stage names of the per-frame timing report, in pipeline order.
 STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "merging",
@@ -312,7 +306,6 @@ class MotionBitsSegmenter:
                                                 cfg.ransac_threshold)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
-            carried_earned = earned
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
@@ -320,10 +313,6 @@ class MotionBitsSegmenter:
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(SPECK_CELLS * cw * ch)))
-            if cam is None:  # under a moving camera, parallax leaves pieces behind too
-                labels = self._split_stopped(labels, prior, prior_valid & carried_earned, ids,
-                                             thetas, trans, cur_g,
-                                             int(np.ceil(SPLIT_CELLS * cw * ch)))
 
         with self._stage("merging"):
             moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
@@ -359,22 +348,6 @@ class MotionBitsSegmenter:
                                   moving, rep, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
         return result
-
-    def _split_stopped(self, labels, prior, held, ids, thetas, trans, cur_gray, min_area):
-        """Parts of moving MotionBits that stopped, as MotionBits of their own
-        (:func:`motionbits.masks.split_stopped`), kept only where standing still shows: the
-        MotionBit's motion would have visibly moved the piece's image. Each differs from the
-        MotionBit it left and has moved as long as it did."""
-        labels, split = split_stopped(labels, prior, held, ids, self._next_id, min_area)
-        motion_of = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
-        for new, old in split.items():
-            if stillness_visible(labels, new, motion_of[old], cur_gray) <= self.config.merge_disagree:
-                labels[labels == new] = 0
-                continue
-            self._groups.forbid(new, [old])
-            self._spans.inherit(new, old, self.frame_index - 1)
-        self._next_id += len(split)
-        return labels
 
     @property
     def _dtype(self) -> type:
