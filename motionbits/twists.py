@@ -226,7 +226,7 @@ def nodes_to_fit(node_flow: np.ndarray, prior_nodes: np.ndarray, shape: tuple[in
 
 
 def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.ndarray,
-                        theta: float, t: np.ndarray, *, iterations: int = 30,
+                        theta: float, t: np.ndarray, *, iterations: int = 10,
                         margin: int = 16) -> tuple[float, np.ndarray]:
     """Refine a rigid backward motion q = R(theta) p + t of the pixels ``mask`` on the images
     themselves (OpenCV's ECC alignment, Euclidean model, started from the given motion).
