@@ -572,9 +572,11 @@ CASES: list[Case] = [
     Case("synth/frames-1", cli("synth", "--track", "robot", "--out", "{t}/s", "--frames", "1"), CLEAR, "--frames", absent=("s",)),
     Case("synth/track-unknown", cli("synth", "--track", "car", "--out", "{t}/s"), CLEAR, "--track", absent=("s",)),
     Case("synth/track-not-empty", prepared(robot_track_with_thesis, cli(
-        "synth", "--track", "robot", "--out", "{t}/d")), CLEAR, "--overwrite"),
+        "synth", "--track", "robot", "--out", "{t}/d")), CLEAR, "--overwrite",
+        requires=mujoco_renders),  # without mujoco, that is the one-line error reported first
     Case("synth/overwrite-unrelated", prepared(robot_track_with_thesis, cli(
-        "synth", "--track", "robot", "--out", "{t}/d", "--overwrite")), CLEAR, "did not write"),
+        "synth", "--track", "robot", "--out", "{t}/d", "--overwrite")), CLEAR, "did not write",
+        requires=mujoco_renders),
     Case("synth/other-track-kept", prepared(lambda t: (t / "d/hand/scene_0000").mkdir(parents=True), cli(
         "synth", "--track", "robot", "--out", "{t}/d", "--scenes", "1", "--frames", "3", "--size", "64x48", "--quiet")),
         CORRECT, check=lambda o, t: (t / "d/hand/scene_0000").is_dir() and (t / "d/robot/scene_0000/gt.png").is_file(),
