@@ -10,7 +10,9 @@ back along the flow:
   correspondence explains its appearance (a disoccluded pixel has no correspondence, so
   its residual is large and the label it would inherit from the occluder is dropped);
 - :func:`motion_gain`: grey levels by which the flow explains a neighbourhood better than
-  "nothing moved" (the birth test of a new MotionBit).
+  "nothing moved" (the birth test of a new MotionBit);
+- :func:`photometric_residual`: how well one parametric motion explains a box of the image
+  (pixel masks, the merging test of touching MotionBits).
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ import numpy as np
 
 from motionbits.flow import sample_maps
 
-__all__ = ["pull_back", "gradient_magnitude", "appearance_consistent", "motion_gain"]
+__all__ = ["pull_back", "gradient_magnitude", "appearance_consistent", "motion_gain",
+           "photometric_residual"]
 
 
 def pull_back(prev_gray: np.ndarray, flow_back: np.ndarray) -> np.ndarray:
@@ -70,3 +73,22 @@ def motion_gain(cur_gray: np.ndarray, prev_gray: np.ndarray, pulled: np.ndarray,
     moving bodies get ~0 too, so a birth test averages it over a whole cluster.
     """
     return cv2.blur(np.abs(cur_gray - prev_gray) - np.abs(cur_gray - pulled), (window, window))
+
+
+def photometric_residual(cur: np.ndarray, prev: np.ndarray, motion: np.ndarray,
+                         box: tuple[slice, slice], window: int = 3) -> np.ndarray:
+    """Mean absolute grey-level difference between ``cur`` and ``prev`` pulled back by the
+    (2, 3) backward map ``motion`` (``out(p) = prev(motion [p; 1])``), over a ``window``
+    square, on the image box ``box``; the box is grown by the window radius (clipped to the
+    image) so that the result is the whole-image one, cropped."""
+    h, w = cur.shape
+    r = window // 2
+    y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
+    x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
+    m = motion.astype(np.float64).copy()
+    m[:, 2] += m[:, 0] * x0 + m[:, 1] * y0  # output origin moved to (x0, y0)
+    warped = cv2.warpAffine(prev, m.astype(np.float32), (x1 - x0, y1 - y0),
+                            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                            borderMode=cv2.BORDER_REPLICATE)
+    cost = cv2.blur(np.abs(cur[y0:y1, x0:x1] - warped), (window, window))
+    return cost[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0]

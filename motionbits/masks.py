@@ -13,8 +13,9 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
-from motionbits.twists import kabsch_2d
+from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "SPECK_CELLS"]
 
@@ -80,26 +81,6 @@ def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
     xs = np.flatnonzero((node_x >= cols[0]) & (node_x <= cols[-1]))
     box = slice(ys[0], ys[-1] + 1), slice(xs[0], xs[-1] + 1)
     return box[0], box[1], m[np.ix_(node_y[box[0]], node_x[box[1]])]
-
-
-def _photometric_cost(cur: np.ndarray, prev: np.ndarray, theta: float, t: np.ndarray,
-                      window: int, box: tuple[slice, slice]) -> np.ndarray:
-    """Mean absolute grey-level difference between the current frame and the previous
-    frame pulled back by the backward motion (R(theta), t), over a ``window`` square, on
-    the image box ``box``. The box is grown by the window radius (clipped to the image) so
-    the mean is the one over the whole image, cropped."""
-    h, w = cur.shape
-    r = window // 2
-    y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
-    x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
-    c, s = np.cos(theta), np.sin(theta)
-    # the same map as on the whole image, with the output origin moved to (x0, y0)
-    m = np.array([[c, -s, t[0] + c * x0 - s * y0], [s, c, t[1] + s * x0 + c * y0]], np.float32)
-    warped = cv2.warpAffine(prev, m, (x1 - x0, y1 - y0),
-                            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                            borderMode=cv2.BORDER_REPLICATE)
-    cost = cv2.blur(np.abs(cur[y0:y1, x0:x1] - warped), (window, window))
-    return cost[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0]
 
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
@@ -171,7 +152,8 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         if support is None:
             continue
         rows, cols, inside = support
-        photo = _photometric_cost(cur_gray, prev_gray, th, t, window, (rows, cols))[inside]
+        photo = photometric_residual(cur_gray, prev_gray, rigid_matrix(th, t), (rows, cols),
+                                     window)[inside]
         ys, xs = np.nonzero(inside)
         ys += rows.start
         xs += cols.start

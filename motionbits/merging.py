@@ -24,10 +24,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
 
-__all__ = ["touching_pairs", "fit_affine", "photometric_residual", "MotionBitGroups",
+__all__ = ["touching_pairs", "fit_affine", "MotionBitGroups",
            "observe_touching"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
@@ -68,25 +69,6 @@ def fit_affine(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray)
     sw = np.sqrt(np.maximum(weights, 1e-6))[:, None]
     sol, *_ = np.linalg.lstsq(x * sw, back_points.astype(np.float64) * sw, rcond=None)
     return sol.T
-
-
-def photometric_residual(cur: np.ndarray, prev: np.ndarray, motion: np.ndarray,
-                         box: tuple[slice, slice], window: int = 3) -> np.ndarray:
-    """Mean absolute grey-level difference between ``cur`` and ``prev`` pulled back by the
-    (2, 3) backward map ``motion`` (``out(p) = prev(motion [p; 1])``), over a ``window``
-    square, on the image box ``box``; the box is grown by the window radius (clipped to the
-    image) so that the result is the whole-image one, cropped."""
-    h, w = cur.shape
-    r = window // 2
-    y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
-    x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
-    m = motion.astype(np.float64).copy()
-    m[:, 2] += m[:, 0] * x0 + m[:, 1] * y0  # output origin moved to (x0, y0)
-    warped = cv2.warpAffine(prev, m.astype(np.float32), (x1 - x0, y1 - y0),
-                            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                            borderMode=cv2.BORDER_REPLICATE)
-    cost = cv2.blur(np.abs(cur[y0:y1, x0:x1] - warped), (window, window))
-    return cost[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0]
 
 
 class MotionBitGroups:
