@@ -68,6 +68,11 @@ class MotionSpans:
             self.first.setdefault(int(i), frame_index)
             self.last[int(i)] = frame_index
 
+    def inherit(self, child: int, parent: int, last: int) -> None:
+        """``child`` (a piece of ``parent``) moved with ``parent`` until ``last``."""
+        if parent in self.first:
+            self.first.setdefault(child, self.first[parent])
+            self.last.setdefault(child, min(last, self.last[parent]))
 
 
 def moving_ids(points: np.ndarray, node_ids: np.ndarray, ids: np.ndarray, thetas: np.ndarray,

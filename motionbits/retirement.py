@@ -18,7 +18,7 @@ import numpy as np
 
 from motionbits.twists import rigid_matrix
 
-__all__ = ["Origin", "moved_evidence", "retire"]
+__all__ = ["Origin", "origin_residuals", "moved_evidence", "retire"]
 
 #: px: below this median distance between where a MotionBit's own and the world's
 #: accumulated motions put its pixels, the two cannot be told apart (no verdict).
@@ -61,15 +61,15 @@ def _residual(frame: np.ndarray, motion: np.ndarray, cur: np.ndarray, box, insid
     return float(diff.mean()) if diff.size > 0.5 * inside.sum() else np.nan
 
 
-def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
-                   min_separation: float) -> float:
-    """Grey levels by which the MotionBit's own accumulated motion explains its pixels
-    ``mask`` (H, W) bool in ``cur_gray`` better than the static world's motion does
-    (negative: it never moved). NaN when the two motions move its pixels less than
+def origin_residuals(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
+                     min_separation: float) -> tuple[float, float]:
+    """Mean grey-level residuals (world, body) of the pixels ``mask`` (H, W) bool of
+    ``cur_gray`` against the origin frame pulled back by the static world's and by the
+    MotionBit's accumulated motion; NaN when the two motions move its pixels less than
     ``min_separation`` px apart (nothing to tell) or its origin is out of view."""
     ys, xs = np.nonzero(mask)
     if len(xs) == 0:
-        return np.nan
+        return np.nan, np.nan
     step = max(1, len(xs) // SEPARATION_SAMPLES)
     pts = np.stack([xs[::step], ys[::step], np.ones(len(xs[::step]))]).astype(np.float64)
 
@@ -78,20 +78,42 @@ def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
         return q[:2] / q[2]
 
     if np.median(np.linalg.norm(apply(origin.body) - apply(origin.world), axis=0)) < min_separation:
-        return np.nan
+        return np.nan, np.nan
     box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
     inside = mask[box]
-    return _residual(origin.frame, origin.world, cur_gray, box, inside) - _residual(
-        origin.frame, origin.body, cur_gray, box, inside)
+    return (_residual(origin.frame, origin.world, cur_gray, box, inside),
+            _residual(origin.frame, origin.body, cur_gray, box, inside))
+
+
+def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
+                   min_separation: float) -> float:
+    """Grey levels by which the MotionBit's own accumulated motion explains its pixels
+    ``mask`` (H, W) bool in ``cur_gray`` better than the static world's motion does
+    (negative: it never moved); NaN as in :func:`origin_residuals`."""
+    world, body = origin_residuals(origin, cur_gray, mask, min_separation)
+    return world - body
+
+
+def _world_residual(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray) -> float:
+    """:func:`_residual` of the static world's motion over the pixels ``mask``."""
+    ys, xs = np.nonzero(mask)
+    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
+    return _residual(origin.frame, origin.world, cur_gray, box, mask[box])
 
 
 def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
            thetas: np.ndarray, trans: np.ndarray, first_new: int, cam: np.ndarray | None,
-           prev_gray: np.ndarray, cur_gray: np.ndarray, margin: float
+           prev_gray: np.ndarray, cur_gray: np.ndarray, margin: float, *,
+           explained: float = np.inf, first: Origin | None = None
            ) -> tuple[np.ndarray, dict[int, Origin]]:
     """Advance every MotionBit's origin by this frame's motions and retire those whose
-    pixels the static world explains better, by more than ``margin`` grey levels, than
-    their own accumulated motion (:func:`moved_evidence`).
+    pixels the static world explains -- within ``explained`` grey levels (mean residual),
+    from the frame before the MotionBit's birth or from the stream's first frame
+    (``first``) -- and better, by more than ``margin`` grey levels, than their own
+    accumulated motion (:func:`origin_residuals`). Where no frame explains them (a body
+    carried and set down: the fitted motion of a body lowered in depth drifts, and the
+    static world shows what was there before it arrived) the MotionBit stays; the first
+    frame still explains background that an arm covered at a MotionBit's birth.
 
     Args:
         labels: (H, W) int32 label map of this frame.
@@ -104,6 +126,9 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         prev_gray: (H, W) float32 previous grey frame (not stabilised).
         cur_gray: (H, W) float32 current grey frame.
         margin: grey levels (config ``retire_margin``).
+        explained: grey levels (config ``carry_tolerance``).
+        first: the stream's first frame with the static world's motion since (its ``body``
+            is not used; advanced in place), or None.
 
     Returns:
         ``labels`` without the retired MotionBits, and the origins of those present.
@@ -114,6 +139,8 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
     present = set(np.unique(labels[labels > 0]).tolist())
     origins = {i: o for i, o in origins.items() if i in present}
     out = labels
+    if first is not None:
+        first.advance(world, world)
     for i in sorted(present):
         if i >= first_new:
             origins[i] = Origin(prev_gray, np.eye(3), np.eye(3))
@@ -121,8 +148,11 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         if origin is None:
             continue
         origin.advance(own.get(i, world), world)
-        gain = moved_evidence(origin, cur_gray, labels == i, MIN_SEPARATION)
-        if gain < -margin:
+        mask = labels == i
+        world_res, body_res = origin_residuals(origin, cur_gray, mask, MIN_SEPARATION)
+        if first is not None and np.isfinite(body_res):
+            world_res = np.nanmin([world_res, _world_residual(first, cur_gray, mask)])
+        if world_res < explained and world_res - body_res < -margin:
             out = np.where(out == i, 0, out)
             del origins[i]
     return out, origins

@@ -38,6 +38,7 @@ from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids)
 from motionbits.retirement import Origin, retire
+from motionbits.setdown import SetDown
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
@@ -125,7 +126,10 @@ class MotionBitsSegmenter:
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
         self._origins: dict[int, Origin] = {}  # id -> its birth frame and motion since
+        self._first: Origin | None = None  # the first frame and the world's motion since
         self._tentative: set[int] = set()  # ids born at the last frame, not yet confirmed
+        # pieces a MotionBit left behind (a body set down), new MotionBits
+        self._setdown = SetDown(self.config.pixel_evidence, self.config.carry_tolerance)
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._spans = MotionSpans()  # first / last frame each id moved
         self._timings: dict[str, float] = {}
@@ -231,6 +235,8 @@ class MotionBitsSegmenter:
             # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), _gray(self._prev)
             raw_prev_g = prev_g
+            if self._first is None:
+                self._first = Origin(raw_prev_g, np.eye(3), np.eye(3))
             pulled = pull_back(prev_g, flow_back)
             gradient = gradient_magnitude(cur_g)
             # a carried label holds a pixel only where the flow is consistent both ways and
@@ -306,6 +312,7 @@ class MotionBitsSegmenter:
                                                 cfg.ransac_threshold)
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
+            carried_earned = earned
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
@@ -313,6 +320,14 @@ class MotionBitsSegmenter:
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(SPECK_CELLS * cw * ch)))
+            # bodies set down: pieces left behind by a moving MotionBit become MotionBits
+            labels = self._setdown.confirm(labels, cur_g, prev_g)
+            labels, held, self._next_id = self._setdown.split(
+                labels, prior, prior_valid, carried_earned, ids, thetas, trans, cur_g, prev_g,
+                grid.cell, self._next_id, cam)
+            earned = earned | held
+            for i in self._setdown.pending:
+                self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)
 
         with self._stage("merging"):
             moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
@@ -321,11 +336,15 @@ class MotionBitsSegmenter:
                              first_new, hist_nodes, seen_pts, back_pts, reliability, cur_g,
                              prev_g, disagree=cfg.merge_disagree)
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
-                                           first_new, cam, raw_prev_g, cur_g, cfg.retire_margin)
+                                           first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
+                                           explained=cfg.carry_tolerance,
+                                           first=self._first)
             rep = self._groups.representatives(np.unique(labels[labels > 0]))
             # a MotionBit born this frame is shown once it moves again, or as part of a
-            # group that is already shown
-            shown = {r for i, r in rep.items() if i not in self._tentative}
+            # group that is already shown; a piece set down, once it still stands at the
+            # next frame
+            shown = {r for i, r in rep.items()
+                     if i not in self._tentative and i not in self._setdown.pending}
             # ... and covers at least MIN_SHOWN_CELLS grid cells (smaller ones are flow noise)
             area = np.bincount(labels.ravel())
             group_area: dict[int, int] = {}
@@ -339,6 +358,7 @@ class MotionBitsSegmenter:
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
+            self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev = cur
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low)

@@ -1,0 +1,219 @@
+"""Bodies set down: a piece a MotionBit leaves behind becomes a MotionBit of its own (ours).
+
+While a hand carries a body, the two move as one, and the clustering (held together by
+the paper's temporal constraints) gives them one MotionBit. When the hand lets go and
+moves on, the body's pixels still carry that MotionBit's label, but its motion -- the
+hand's -- no longer explains them and "static" does, so they would return to the
+background although the body moved. A piece of a MotionBit lost this way becomes a new
+MotionBit when
+
+- it is compact (an opening by one grid cell keeps most of it), covers at least
+  ``SETDOWN_CELLS`` grid cells, and most of its pixels *earned* their label (the
+  MotionBit's motion once explained them better than "static");
+- it is at rest now, and "static" explains it better than its MotionBit's motion by a
+  visible margin;
+- it *came with* its MotionBit: its pixels today, followed back along the MotionBit's
+  motion over the last ``WINDOW`` frames (and standing still this frame), match the frame
+  of then clearly better than the static world does, and within ``rest`` grey levels
+  (:func:`motionbits.retirement.origin_residuals`, the test that retires MotionBits that
+  never moved). Background that a moving MotionBit uncovered or smeared its label onto
+  fails this test: it was there all along, or what was there before was something else;
+
+and it is shown from the next frame on, if it still stands there, at rest. A piece lost
+next to a piece set down earlier by the same MotionBit joins it.
+
+State: the last ``WINDOW`` grey frames and each MotionBit's motion at those frames.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from motionbits.evidence import photometric_residual
+from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
+from motionbits.twists import rigid_matrix
+
+__all__ = ["SetDown", "SETDOWN_CELLS", "EARNED_SHARE", "COMPACT_SHARE", "REST_SHARE", "WINDOW"]
+
+#: A piece left behind must cover at least this many grid cells ...
+SETDOWN_CELLS = 8
+#: ... this share of its pixels must have earned their label ...
+EARNED_SHARE = 0.5
+#: ... and an opening by a square of one grid cell must keep this share of it (compact).
+COMPACT_SHARE = 0.5
+#: Frames over which a piece must be seen to have come with its MotionBit.
+WINDOW = 3
+#: At the next frame it is confirmed if it still holds this share of its area.
+REST_SHARE = 0.5
+#: The still (2, 3) motion.
+_STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+
+
+@dataclass
+class _Frame:
+    gray: np.ndarray  # (H, W) float32 grey frame before this one (not stabilised)
+    world: np.ndarray  # (3, 3) backward motion of the static world at this frame
+    own: dict[int, np.ndarray]  # id -> (3, 3) backward motion of each MotionBit
+
+
+@dataclass
+class SetDown:
+    """Pieces left behind by a moving MotionBit, across frames.
+
+    Args:
+        evidence: grey levels (3x3 mean) by which "static" must explain a piece better than
+            its MotionBit's motion now, and its MotionBit's recent motion must explain it
+            better than the static world (config ``pixel_evidence``).
+        rest: grey levels; a piece is at rest when its mean |I_t - I_t-1| (3x3 mean) is
+            below this (config ``carry_tolerance``).
+
+    Attributes:
+        pending: new id -> its area (px) at birth, for pieces not yet confirmed (not shown).
+        parent: new id -> the id of the MotionBit it was left behind by.
+    """
+
+    evidence: float
+    rest: float
+    pending: dict[int, int] = field(default_factory=dict)
+    parent: dict[int, int] = field(default_factory=dict)
+    _past: deque = field(default_factory=lambda: deque(maxlen=WINDOW))
+
+    def record(self, prev_gray: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
+               trans: np.ndarray, cam: np.ndarray | None) -> None:
+        """Keep this frame's motions and the frame before it (at the end of each frame).
+
+        Args:
+            prev_gray: (H, W) float32 previous grey frame (not stabilised).
+            ids, thetas, trans: ids with a cluster now and their backward motions
+                (relative to the camera).
+            cam: (3, 3) camera motion of this frame (current -> previous) or None (static).
+        """
+        world = np.eye(3) if cam is None else cam
+        own = {int(i): world @ np.vstack([rigid_matrix(th, t), [0.0, 0.0, 1.0]])
+               for i, th, t in zip(ids, thetas, trans)}
+        self._past.append(_Frame(prev_gray, world, own))
+
+    def confirm(self, labels: np.ndarray, cur: np.ndarray, prev: np.ndarray) -> np.ndarray:
+        """Confirm the pieces set down at the last frame that still stand, at rest, on at
+        least ``REST_SHARE`` of their area; drop the others.
+
+        Args:
+            labels: (H, W) int32 label map of this frame.
+            cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
+
+        Returns:
+            ``labels`` without the dropped pieces.
+        """
+        out = labels
+        for i, area in self.pending.items():
+            m = labels == i
+            if m.sum() < REST_SHARE * area or _mean_still(cur, prev, m) > self.rest:
+                out = np.where(m, 0, out)
+        self.pending = {}
+        if self.parent:  # forget the parents of pieces that are gone
+            present = set(np.unique(out).tolist())
+            self.parent = {i: p for i, p in self.parent.items() if i in present}
+        return out
+
+    def split(self, labels: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
+              earned: np.ndarray, ids: np.ndarray, thetas: np.ndarray, trans: np.ndarray,
+              cur: np.ndarray, prev: np.ndarray, cell: tuple[float, float], next_id: int,
+              cam: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, int]:
+        """New MotionBits from the pieces that MotionBits with a cluster now left behind.
+
+        Args:
+            labels: (H, W) int32 label map of this frame.
+            prior: (H, W) int32 last frame's labels carried to this frame.
+            prior_valid: (H, W) bool, where ``prior`` is trustworthy.
+            earned: (H, W) bool, carried: where the pixel's label was earned.
+            ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,),
+                ``trans`` (K, 2) (relative to the camera).
+            cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
+            cell: (w, h) px of one grid cell.
+            next_id: the id the next new MotionBit gets.
+            cam: (3, 3) camera motion of this frame (current -> previous) or None (static).
+
+        Returns:
+            The label map with the new pieces, the (H, W) bool pixels they hold (their
+            ``earned`` map, carried on), and the next ``next_id``.
+        """
+        held = np.zeros(labels.shape, bool)
+        lost = (labels == 0) & (prior > 0) & prior_valid
+        if len(self._past) < WINDOW or not lost.any():
+            return labels, held, next_id
+        out = labels.copy()
+        side = max(1, int(round(max(cell))))
+        kernel = np.ones((side, side), np.uint8)
+        min_area = SETDOWN_CELLS * cell[0] * cell[1]
+        for lab, th, t in zip(ids, thetas, trans):
+            mask = (lost & (prior == lab)).astype(np.uint8)
+            if mask.sum() < min_area:
+                continue
+            n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+            for k in range(1, n):
+                if stats[k, cv2.CC_STAT_AREA] < min_area:
+                    continue
+                x, y, w, h = stats[k, :4]
+                box = slice(y, y + h), slice(x, x + w)
+                piece = comp[box] == k
+                opened = cv2.morphologyEx(piece.astype(np.uint8), cv2.MORPH_OPEN, kernel) > 0
+                if (opened.sum() < COMPACT_SHARE * piece.sum()
+                        or earned[box][piece].mean() < EARNED_SHARE):
+                    continue
+                still = photometric_residual(cur, prev, _STILL, box)[piece].mean()
+                moved = photometric_residual(cur, prev, rigid_matrix(th, t), box)[piece].mean()
+                if still > self.rest or moved - still < self.evidence:
+                    continue
+                full = np.zeros(labels.shape, bool)
+                full[box] = piece
+                world, body = self._came_with(int(lab), cur, full, cam)
+                if not (world - body > self.evidence and body < self.rest):
+                    continue
+                new = self._neighbour(out, box, piece, int(lab), side)
+                if new is None:
+                    new, next_id = next_id, next_id + 1
+                    self.pending[new] = int(piece.sum())
+                    self.parent[new] = int(lab)
+                out[box][piece] = new
+                held[box][piece] = True
+        return out, held, next_id
+
+    def _came_with(self, lab: int, cur: np.ndarray, mask: np.ndarray,
+                   cam: np.ndarray | None) -> tuple[float, float]:
+        """Mean grey-level residuals (world, body) of the pixels ``mask`` of ``cur``
+        against the frame ``WINDOW`` frames before the last one, pulled back by the static
+        world's motion and by "moved with MotionBit ``lab`` (with the world where it had
+        no cluster), then stood still this frame" (NaN: the two cannot be told apart)."""
+        world_now = np.eye(3) if cam is None else cam
+        body, world = np.eye(3), np.eye(3)
+        for past in self._past:
+            body = body @ past.own.get(lab, past.world)
+            world = world @ past.world
+        origin = Origin(self._past[0].gray, body @ world_now, world @ world_now)
+        return origin_residuals(origin, cur, mask, MIN_SEPARATION)
+
+    def _neighbour(self, labels: np.ndarray, box: tuple[slice, slice], piece: np.ndarray,
+                   parent: int, reach: int) -> int | None:
+        """An earlier piece of the same ``parent`` that ``piece`` touches, if any."""
+        h, w = labels.shape
+        y0, y1 = max(box[0].start - reach, 0), min(box[0].stop + reach, h)
+        x0, x1 = max(box[1].start - reach, 0), min(box[1].stop + reach, w)
+        grown = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        grown[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0] = piece
+        grown = cv2.dilate(grown, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
+        near = np.unique(labels[y0:y1, x0:x1][grown])
+        same = [int(i) for i in near if self.parent.get(int(i)) == parent]
+        return min(same) if same else None
+
+
+def _mean_still(cur: np.ndarray, prev: np.ndarray, mask: np.ndarray) -> float:
+    """Mean |cur - prev| (3x3 mean) over ``mask`` (0 if empty)."""
+    if not mask.any():
+        return 0.0
+    ys, xs = np.nonzero(mask)
+    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
+    return float(photometric_residual(cur, prev, _STILL, box)[mask[box]].mean())

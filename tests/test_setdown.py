@@ -1,0 +1,96 @@
+"""A body carried and set down keeps a MotionBit (issue "Only what moved": pick-and-place).
+
+While a carrier and the body it carries move as one, they share one MotionBit; when the
+body stops and the carrier moves on, the body must not return to the background."""
+
+import numpy as np
+import pytest
+
+from motionbits import MotionBitsConfig, segment_video
+from motionbits.retirement import Origin, retire
+from motionbits.setdown import SetDown
+from motionbits.synth.planar import Body, Polygon, render_planar_clip
+
+SIZE = (240, 320)
+CONFIG = MotionBitsConfig(n_nodes=2500, max_side=max(SIZE))
+
+
+def _carry_clip(seed: int):
+    """A carrier and the body behind it move together 5 px/frame; the body stops after
+    frame 7, the carrier moves on; a static distractor."""
+    carried = Polygon.rect(40, 90, 90, 140, texture_seed=3)
+    carrier = Polygon.rect(90, 70, 150, 160, texture_seed=5)
+    bodies = [Body((carried,), velocity=(5.0, 0.0), stop=7), Body((carrier,), velocity=(5.0, 0.0)),
+              Body((Polygon.regular(260, 200, 22, 5, texture_seed=8),))]
+    return render_planar_clip(bodies, size=SIZE, n_frames=14, seed=seed)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_body_set_down_keeps_its_own_motionbit(seed):
+    clip = _carry_clip(seed)
+    results = list(segment_video(clip.frames, CONFIG))
+    last, gt = results[-1], clip.labels[-1]
+    ids = {}
+    for body in (1, 2):  # 1 = the carried body, 2 = the carrier
+        lab, counts = np.unique(last.labels[gt == body], return_counts=True)
+        main = lab[np.argmax(np.where(lab > 0, counts, 0))]
+        assert main > 0 and counts[lab == main][0] >= 0.85 * (gt == body).sum(), (body, lab, counts)
+        ids[body] = int(main)
+    assert ids[1] != ids[2]  # two bodies, two MotionBits
+    record = {mb.id: mb for mb in last.motionbits}[ids[1]]
+    assert not record.moving and record.first_moved <= 2 and record.last_moved <= 8
+    static = gt == 0
+    assert ((last.labels > 0) & static).sum() <= 0.05 * static.sum()
+
+
+def test_split_needs_a_piece_that_came_with_its_motionbit():
+    """A compact piece of a MotionBit that "static" now explains becomes a new MotionBit
+    only if its images moved with the MotionBit (a textured patch that was carried), not if
+    it is background that was there all along."""
+    rng = np.random.default_rng(0)
+    h, w = 60, 80
+    world = rng.uniform(0, 255, (h + 40, w + 40)).astype(np.float32)
+    patch = rng.uniform(0, 255, (20, 20)).astype(np.float32)
+    frames = []
+    for k in range(5):  # the patch moves 3 px/frame until frame 3, then stays
+        f = world[20:20 + h, 20:20 + w].copy()
+        x = 10 + 3 * min(k, 3)
+        f[20:40, x:x + 20] = patch
+        frames.append(f)
+    cell = (4.0, 4.0)
+    ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])  # parent moves on
+    for came in (True, False):
+        sd = SetDown(evidence=3.0, rest=12.0)
+        seq = frames if came else [frames[-1]] * 5  # False: the patch was always there
+        for k in range(1, 4):
+            sd.record(seq[k - 1], ids, thetas, trans, None)
+        labels = np.zeros((h, w), np.int32)
+        prior = np.zeros((h, w), np.int32)
+        prior[20:40, 19:39] = 1
+        earned = prior > 0
+        out, held, nxt = sd.split(labels, prior, np.ones((h, w), bool), earned, ids, thetas,
+                                  trans, seq[4], seq[3], cell, 2, None)
+        assert (nxt == 3) == came and held.any() == came
+        if came:
+            assert (out[held] == 2).all() and sd.pending == {2: int(held.sum())}
+
+
+def test_retire_needs_a_static_frame_that_explains_the_pixels():
+    """A MotionBit is retired only where the static world explains its pixels: from the
+    frame before its birth or from the stream's first frame."""
+    rng = np.random.default_rng(1)
+    prev = rng.uniform(0, 255, (80, 80)).astype(np.float32)
+    labels = np.zeros((80, 80), np.int32)
+    labels[30:50, 30:50] = 1
+    ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[5.0, 0.0]])
+    cur = prev.copy()
+    cur[30:50, 30:50] += 30.0  # something else stands there now: no frame explains it
+    out, _ = retire(labels, {}, ids, thetas, trans, 1, None, prev, cur, 5.0)
+    assert not out.any()  # without a tolerance, "the world explains it better" retires it
+    out, _ = retire(labels, {}, ids, thetas, trans, 1, None, prev, cur, 5.0, explained=12.0)
+    np.testing.assert_array_equal(out, labels)
+    # ... but the first frame of the stream shows the same pixels: it never moved
+    first = Origin(cur.copy(), np.eye(3), np.eye(3))
+    out, _ = retire(labels, {}, ids, thetas, trans, 1, None, prev, cur, 5.0, explained=12.0,
+                    first=first)
+    assert not out.any()
