@@ -7,7 +7,7 @@ hand's -- no longer explains them and "static" does, so they would return to the
 background although the body moved. A piece of a MotionBit lost this way becomes a new
 MotionBit when
 
-- it is compact (an opening by one grid cell keeps most of it), covers at least
+- it is compact (an opening by two grid cells keeps most of it), covers at least
   ``SETDOWN_CELLS`` grid cells, and most of its pixels *earned* their label (the
   MotionBit's motion once explained them better than "static");
 - it is at rest now, and "static" explains it better than its MotionBit's motion by a
@@ -37,14 +37,17 @@ from motionbits.evidence import photometric_residual
 from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
 from motionbits.twists import rigid_matrix
 
-__all__ = ["SetDown", "SETDOWN_CELLS", "EARNED_SHARE", "COMPACT_SHARE", "REST_SHARE", "WINDOW"]
+__all__ = ["SetDown", "SETDOWN_CELLS", "EARNED_SHARE", "COMPACT_SHARE", "COMPACT_CELLS",
+           "REST_SHARE", "WINDOW"]
 
 #: A piece left behind must cover at least this many grid cells ...
 SETDOWN_CELLS = 8
 #: ... this share of its pixels must have earned their label ...
 EARNED_SHARE = 0.5
-#: ... and an opening by a square of one grid cell must keep this share of it (compact).
+#: ... and an opening by a square of ``COMPACT_CELLS`` grid cells must keep this share of
+#: it (compact: the strip of background a moving body uncovers is not).
 COMPACT_SHARE = 0.5
+COMPACT_CELLS = 2
 #: Frames over which a piece must be seen to have come with its MotionBit.
 WINDOW = 3
 #: At the next frame it is confirmed if it still holds this share of its area.
@@ -146,7 +149,7 @@ class SetDown:
         if len(self._past) < WINDOW or not lost.any():
             return labels, held, next_id
         out = labels.copy()
-        side = max(1, int(round(max(cell))))
+        side = max(1, int(round(COMPACT_CELLS * max(cell))))
         kernel = np.ones((side, side), np.uint8)
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
         for lab, th, t in zip(ids, thetas, trans):
