@@ -23,7 +23,10 @@ import numpy as np
 from motionbits.flow import sample_maps
 
 __all__ = ["pull_back", "gradient_magnitude", "appearance_consistent", "motion_gain",
-           "photometric_residual"]
+           "photometric_residual", "static_residual"]
+
+#: Grey levels added before taking logs of intensities (dark pixels have noisy ratios).
+LOG_OFFSET = 8.0
 
 
 def pull_back(prev_gray: np.ndarray, flow_back: np.ndarray) -> np.ndarray:
@@ -62,17 +65,43 @@ def appearance_consistent(cur_gray: np.ndarray, pulled: np.ndarray, gradient: np
     return resid < tolerance + gradient_gain * gradient
 
 
-def motion_gain(cur_gray: np.ndarray, prev_gray: np.ndarray, pulled: np.ndarray,
+def static_residual(cur: np.ndarray, prev: np.ndarray, cur_gray: np.ndarray,
+                    prev_gray: np.ndarray, sigma: float) -> np.ndarray:
+    """(H, W) float32 grey levels by which "nothing moved, only the light changed" misses
+    each pixel: the smaller of ``|I_t - I_t-1|`` (grey) and the colour residual left after a
+    smooth brightness gain, ``mean_c |I_t,c - g I_t-1,c|`` with ``log g`` the Gaussian
+    (``sigma`` px) mean of the per-pixel, channel-mean log ratio.
+
+    A moving shadow, a flicker or an exposure change darkens or brightens the static
+    texture under it by a smooth factor and keeps its colour, so the second residual
+    stays small there; a moving body replaces the texture and colour under it, which no
+    smooth gain explains.
+
+    Args:
+        cur, prev: (H, W, 3) uint8 RGB frames (``prev`` camera-stabilised).
+        cur_gray, prev_gray: (H, W) float32 grey versions of them.
+        sigma: px, smoothness of the gain field.
+    """
+    c = cur.astype(np.float32)
+    p = prev.astype(np.float32)
+    ratio = cv2.log(c + LOG_OFFSET) - cv2.log(p + LOG_OFFSET)
+    gain = cv2.exp(cv2.GaussianBlur(ratio.mean(axis=2), (0, 0), sigma))
+    relit = np.abs(c - p * gain[..., None]).mean(axis=2)
+    return np.minimum(np.abs(cur_gray - prev_gray), relit)
+
+
+def motion_gain(still: np.ndarray, cur_gray: np.ndarray, pulled: np.ndarray,
                 window: int) -> np.ndarray:
     """(H, W) float32 grey levels by which the flow explains each pixel's ``window``
-    neighbourhood better than "nothing moved": mean |I_t - I_t-1| - mean |I_t - pulled|.
+    neighbourhood better than "nothing moved": mean ``still`` - mean |I_t - pulled|, with
+    ``still`` the per-pixel residual of "nothing moved" (:func:`static_residual`).
 
     Motion is only observable where the image changes: on textureless regions the flow is
     interpolated from nearby edges -- often from a moving body next to them -- and both
     hypotheses explain the pixels equally well, so the gain is ~0. Uniform interiors of
     moving bodies get ~0 too, so a birth test averages it over a whole cluster.
     """
-    return cv2.blur(np.abs(cur_gray - prev_gray) - np.abs(cur_gray - pulled), (window, window))
+    return cv2.blur(still - np.abs(cur_gray - pulled), (window, window))
 
 
 def photometric_residual(cur: np.ndarray, prev: np.ndarray, motion: np.ndarray,
