@@ -151,7 +151,9 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         mask = labels == i
         world_res, body_res = origin_residuals(origin, cur_gray, mask, MIN_SEPARATION)
         if first is not None and np.isfinite(body_res):
-            world_res = np.nanmin([world_res, _world_residual(first, cur_gray, mask)])
+            from_first = _world_residual(first, cur_gray, mask)
+            if np.isnan(world_res) or from_first < world_res:  # NaN: out of view then
+                world_res = from_first
         if world_res < explained and world_res - body_res < -margin:
             out = np.where(out == i, 0, out)
             del origins[i]
