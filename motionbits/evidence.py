@@ -27,6 +27,9 @@ __all__ = ["pull_back", "gradient_magnitude", "appearance_consistent", "motion_g
 
 #: Grey levels added before taking logs of intensities (dark pixels have noisy ratios).
 LOG_OFFSET = 8.0
+#: The brightness gain of :func:`static_residual` is estimated at this fraction of the
+#: resolution (it is smooth over several grid cells).
+GAIN_SCALE = 4
 
 
 def pull_back(prev_gray: np.ndarray, flow_back: np.ndarray) -> np.ndarray:
@@ -65,28 +68,28 @@ def appearance_consistent(cur_gray: np.ndarray, pulled: np.ndarray, gradient: np
     return resid < tolerance + gradient_gain * gradient
 
 
-def static_residual(cur: np.ndarray, prev: np.ndarray, cur_gray: np.ndarray,
-                    prev_gray: np.ndarray, sigma: float) -> np.ndarray:
+def static_residual(cur_gray: np.ndarray, prev_gray: np.ndarray, sigma: float) -> np.ndarray:
     """(H, W) float32 grey levels by which "nothing moved, only the light changed" misses
-    each pixel: the smaller of ``|I_t - I_t-1|`` (grey) and the colour residual left after a
-    smooth brightness gain, ``mean_c |I_t,c - g I_t-1,c|`` with ``log g`` the Gaussian
-    (``sigma`` px) mean of the per-pixel, channel-mean log ratio.
+    each pixel: the smaller of ``|I_t - I_t-1|`` and ``|I_t - g I_t-1|``, with ``log g``
+    the Gaussian (``sigma`` px) mean of the per-pixel log ratio ``log I_t - log I_t-1``.
 
     A moving shadow, a flicker or an exposure change darkens or brightens the static
-    texture under it by a smooth factor and keeps its colour, so the second residual
-    stays small there; a moving body replaces the texture and colour under it, which no
-    smooth gain explains.
+    texture under it by a smooth factor, so the second residual stays small there; a
+    moving body replaces the texture under it, which no smooth gain explains.
 
     Args:
-        cur, prev: (H, W, 3) uint8 RGB frames (``prev`` camera-stabilised).
-        cur_gray, prev_gray: (H, W) float32 grey versions of them.
+        cur_gray, prev_gray: (H, W) float32 grey frames in [0, 255] (``prev_gray``
+            camera-stabilised).
         sigma: px, smoothness of the gain field.
     """
-    c = cur.astype(np.float32)
-    p = prev.astype(np.float32)
-    ratio = cv2.log(c + LOG_OFFSET) - cv2.log(p + LOG_OFFSET)
-    gain = cv2.exp(cv2.GaussianBlur(ratio.mean(axis=2), (0, 0), sigma))
-    relit = np.abs(c - p * gain[..., None]).mean(axis=2)
+    # the gain field is smooth: it is estimated at 1/GAIN_SCALE of the resolution
+    h, w = cur_gray.shape
+    log_ratio = cv2.log(cur_gray + LOG_OFFSET) - cv2.log(prev_gray + LOG_OFFSET)
+    small = cv2.resize(log_ratio, (max(w // GAIN_SCALE, 1), max(h // GAIN_SCALE, 1)),
+                       interpolation=cv2.INTER_AREA)
+    small = cv2.GaussianBlur(small, (0, 0), max(sigma / GAIN_SCALE, 0.5))
+    gain = cv2.exp(cv2.resize(small, (w, h), interpolation=cv2.INTER_LINEAR))
+    relit = cv2.absdiff(cur_gray, cv2.multiply(prev_gray, gain))
     return np.minimum(np.abs(cur_gray - prev_gray), relit)
 
 

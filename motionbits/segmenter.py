@@ -303,7 +303,7 @@ class MotionBitsSegmenter:
             # computed only if some cluster is a candidate for a new MotionBit
             win = max(EVIDENCE_WINDOW, int(round(max(grid.cell))) | 1)
             # "nothing moved" explains a pixel also when only the light changed on it
-            still = (static_residual(cur, prev_m, cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
+            still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
                      if cfg.relight_sigma else np.abs(cur_g - prev_g))
             evidence = cache(lambda: motion_gain(still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
