@@ -53,8 +53,11 @@ REFERENCE_SIDE = 640
 #: a MotionBit is shown only if its mask covers this many grid cells (about 120 px at 640x480)
 MIN_SHOWN_CELLS = 4
 
-#: Stage names of the per-frame timing report, in pipeline order.
-STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "merging",
+#: Stage names of the per-frame timing report, in pipeline order. "flow" is the flow
+#: backend alone (both directions, validated); "carry" is the work on the two flows before
+#: the twists: forward-backward error, grey frames, the previous frame pulled back, image
+#: gradients, where a carried label still holds, and the labels and their history carried.
+STAGES = ("resize", "flow", "carry", "twists", "graph", "propagation", "clustering", "masks", "merging",
           "bookkeeping")
 
 #: px: forward-backward errors are capped here (a pixel whose backward target leaves the
@@ -224,6 +227,8 @@ class MotionBitsSegmenter:
         with self._stage("flow"):
             flow_fwd = check_flow(self.flow(self._prev, cur), cur.shape[:2], self.flow)
             flow_back = check_flow(self.flow(cur, self._prev), cur.shape[:2], self.flow)
+
+        with self._stage("carry"):
             # pixels whose backward target leaves the image come back inf or nan (remap
             # interpolates the inf border): treat both as "no reliable flow"
             fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
