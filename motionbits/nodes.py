@@ -60,6 +60,29 @@ class NodeGrid:
         return r * self.cols + c
 
     @cached_property
+    def _slot_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """Grid row and column of every node, (n,) each; and an (n, (2R+1)^2) int16 table:
+        the position of each neighbour in a node's list, indexed by its (row, column)
+        offset, -1 where that offset is no neighbour (R: the largest offset)."""
+        n, k = self.neighbors.shape
+        row, col = np.divmod(np.arange(n), self.cols)
+        dr, dc = row[self.neighbors] - row[:, None], col[self.neighbors] - col[:, None]
+        reach = int(max(np.abs(dr).max(initial=0), np.abs(dc).max(initial=0)))
+        side = 2 * reach + 1
+        table = np.full((n, side * side), -1, np.int16)
+        table[np.arange(n)[:, None], (dr + reach) * side + dc + reach] = np.arange(k)
+        return row, col, table, reach
+
+    def edge_slot(self, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+        """Position of node ``dst`` in the neighbour list of node ``src`` (int arrays of
+        one shape), -1 where it is not one of its neighbours."""
+        row, col, table, reach = self._slot_table
+        dr, dc = row[dst] - row[src], col[dst] - col[src]
+        near = (np.abs(dr) <= reach) & (np.abs(dc) <= reach)
+        offset = np.where(near, (dr + reach) * (2 * reach + 1) + dc + reach, 0)
+        return np.where(near, table[src, offset], -1)
+
+    @cached_property
     def pixel_nodes(self) -> tuple[np.ndarray, np.ndarray]:
         """(height,) grid row of each pixel row and (width,) grid column of each pixel
         column under nearest-node upsampling (:meth:`to_image`)."""

@@ -271,7 +271,7 @@ class MotionBitsSegmenter:
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
             raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
             source = grid.nearest_node(seen_pts)
-            past = self._temporal.project(lambda pm: project_past_max(pm, grid.neighbors, source))
+            past = self._temporal.project(lambda pm: project_past_max(pm, grid, source))
             weights = apply_temporal_constraints(raw, grid.neighbors, hist_nodes, past)
             # eq. 4: a node belongs to the moving set if it moves now or was part of a
             # MotionBit at the last frame; enclosed holes (e.g. near a centre of rotation,
