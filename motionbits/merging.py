@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
@@ -47,7 +48,10 @@ def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
         labels: (H, W) int label map.
         reach: px (>= 1).
     """
-    lab = labels.astype(np.int32)
+    box = ndimage.find_objects((labels > 0).astype(np.uint8))
+    if not box:
+        return set()
+    lab = labels[box[0]].astype(np.int32)  # the labelled box: outside it nothing touches
     kernel = np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)
     pairs: set[tuple[int, int]] = set()
     grown_max = cv2.dilate(lab.astype(np.float32), kernel)

@@ -113,10 +113,10 @@ def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids
     """
     h, w = input_size
     scale = w / grid.width, h / grid.height
-    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1)
+    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1, dtype=np.int32)
     for i, r in rep.items():
         lut[i] = r
-    out = lut[labels].astype(np.int32)
+    out = lut[labels]
     node_out = lut[np.minimum(node_ids, len(lut) - 1)] * (node_ids < len(lut))
     members: dict[int, list[int]] = {}
     for i, r in rep.items():

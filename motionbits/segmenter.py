@@ -121,6 +121,7 @@ class MotionBitsSegmenter:
         self._grid: NodeGrid | None = None
         self._seeds: np.ndarray | None = None
         self._prev: np.ndarray | None = None
+        self._prev_gray: np.ndarray | None = None  # (h, w) float32 grey of ``_prev``
         self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
         # label history and largest earlier edge weights (whole video or config.window)
         self._temporal: TemporalState | None = None
@@ -221,7 +222,7 @@ class MotionBitsSegmenter:
         with self._stage("resize"):
             cur = self._to_work(frame)
         if self._prev is None:
-            self._prev = cur
+            self._prev, self._prev_gray = cur, _gray(cur)
             return self._empty_result()
         cfg, grid = self.config, self._grid
         with self._stage("flow"):
@@ -234,7 +235,7 @@ class MotionBitsSegmenter:
             fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
                                    nan=FB_ERROR_CAP, posinf=FB_ERROR_CAP)
             # last frame's labels and label history, carried to this frame
-            cur_g, prev_g = _gray(cur), _gray(self._prev)
+            cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
             pulled = pull_back(prev_g, flow_back)
             gradient = gradient_magnitude(cur_g)
@@ -344,7 +345,7 @@ class MotionBitsSegmenter:
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
-            self._prev = cur
+            self._prev, self._prev_gray = cur, cur_g
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low)
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
