@@ -30,6 +30,10 @@ FIT_GROWTH = 5
 #: Side (px) of the square by which a MotionBit's mask is eroded before its motion is
 #: refined on the images: boundary pixels mix two motions.
 REFINE_ERODE = 5
+#: ECC iteration cap of the refinement, and the px of context around a MotionBit's box
+#: (its motion must stay inside it).
+REFINE_ITERATIONS = 10
+REFINE_MARGIN = 16
 
 
 @dataclass(frozen=True)
@@ -234,8 +238,8 @@ def nodes_to_fit(node_flow: np.ndarray, prior_nodes: np.ndarray, shape: tuple[in
 
 
 def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.ndarray,
-                        theta: float, t: np.ndarray, *, iterations: int = 10,
-                        margin: int = 16) -> tuple[float, np.ndarray]:
+                        theta: float, t: np.ndarray, *, iterations: int = REFINE_ITERATIONS,
+                        margin: int = REFINE_MARGIN) -> tuple[float, np.ndarray]:
     """Refine a rigid backward motion q = R(theta) p + t of the pixels ``mask`` on the images
     themselves (OpenCV's ECC alignment, Euclidean model, started from the given motion).
 
@@ -315,5 +319,6 @@ def refine_moving_motions(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: n
         box = boxes[int(ids[k]) - 1]
         if box is not None:
             thetas[k], trans[k] = _refine_in_box(cur_gray, prev_gray, inner, int(ids[k]), box,
-                                                 thetas[k], trans[k], iterations=10, margin=16)
+                                                 thetas[k], trans[k], iterations=REFINE_ITERATIONS,
+                                                 margin=REFINE_MARGIN)
     return thetas, trans
