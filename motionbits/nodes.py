@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["NodeGrid", "sample_bilinear"]
+__all__ = ["NodeGrid", "sample_bilinear", "fill_holes"]
 
 
 @dataclass(frozen=True)
@@ -111,3 +111,13 @@ def sample_bilinear(field: np.ndarray, points: np.ndarray) -> np.ndarray:
     top = f[y0, x0] * (1 - fx) + f[y0, x1] * fx
     bottom = f[y1, x0] * (1 - fx) + f[y1, x1] * fx
     return (top * (1 - fy) + bottom * fy).astype(np.float32)
+
+
+def fill_holes(mask: np.ndarray) -> np.ndarray:
+    """(H, W) bool ``mask`` with its holes filled: the background not 4-connected to the
+    image border (``scipy.ndimage.binary_fill_holes``, through OpenCV's faster labelling)."""
+    n, lab = cv2.connectedComponents((~mask).astype(np.uint8), connectivity=4)
+    outside = np.zeros(n, bool)
+    outside[np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]])] = True
+    outside[0] = False  # label 0: the mask itself
+    return mask | ~outside[lab]

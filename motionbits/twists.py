@@ -18,6 +18,8 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.nodes import fill_holes
+
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
            "rigid_matrix", "nodes_to_fit", "refine_rigid_motion", "refine_moving_motions"]
 
@@ -233,8 +235,9 @@ def nodes_to_fit(node_flow: np.ndarray, prior_nodes: np.ndarray, shape: tuple[in
     """
     seed = (np.hypot(node_flow[:, 0], node_flow[:, 1]) > FIT_SEED_FRACTION * move_threshold) | (
         prior_nodes != 0)
-    grown = ndimage.binary_dilation(seed.reshape(shape), np.ones((FIT_GROWTH, FIT_GROWTH), bool))
-    return np.flatnonzero(ndimage.binary_fill_holes(grown))
+    grown = cv2.dilate(seed.reshape(shape).astype(np.uint8), np.ones((FIT_GROWTH, FIT_GROWTH),
+                                                                    np.uint8))
+    return np.flatnonzero(fill_holes(grown > 0))
 
 
 def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.ndarray,
