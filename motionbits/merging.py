@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
@@ -48,10 +47,11 @@ def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
         labels: (H, W) int label map.
         reach: px (>= 1).
     """
-    box = ndimage.find_objects((labels > 0).astype(np.uint8))
-    if not box:
+    rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
+    if not len(rows):
         return set()
-    lab = labels[box[0]].astype(np.int32)  # the labelled box: outside it nothing touches
+    # the labelled box: outside it nothing touches
+    lab = labels[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1].astype(np.int32)
     kernel = np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)
     pairs: set[tuple[int, int]] = set()
     grown_max = cv2.dilate(lab.astype(np.float32), kernel)
