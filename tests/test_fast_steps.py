@@ -1,0 +1,150 @@
+"""The speed-ups of the per-frame steps give the same numbers as the plain computations
+they replace (whole-image, one-piece, single-threaded)."""
+
+import cv2
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy import ndimage
+
+from motionbits import workers
+from motionbits.graph import project_past_max
+from motionbits.identity import refine_history
+from motionbits.mcl import cluster_components
+from motionbits.merging import touching_pairs
+from motionbits.nodes import NodeGrid, fill_holes
+from motionbits.propagation import propagate_components, propagate_labels
+
+
+def _blobs(rng, shape=(90, 120), n=4, grid=None):
+    labels = np.zeros(shape, np.int32)
+    for k in range(n):
+        y, x = rng.integers(0, shape[0]), rng.integers(0, shape[1])
+        labels[y:y + rng.integers(2, 30), x:x + rng.integers(2, 30)] = k + 1
+    return labels
+
+
+def test_fill_holes_is_scipys():
+    rng = np.random.default_rng(0)
+    for density in (0.05, 0.3, 0.6):
+        for _ in range(10):
+            mask = ndimage.binary_dilation(rng.random((40, 50)) < density / 4, np.ones((3, 3)))
+            np.testing.assert_array_equal(fill_holes(mask), ndimage.binary_fill_holes(mask))
+    ring = np.zeros((7, 7), bool)
+    ring[1:6, 1:6] = True
+    ring[3, 3] = False
+    assert fill_holes(ring)[3, 3] and not fill_holes(np.zeros((3, 3), bool)).any()
+
+
+def test_edge_slot_finds_each_neighbour_and_nothing_else():
+    grid = NodeGrid.build(48, 64, 9, 6)
+    rng = np.random.default_rng(1)
+    src = rng.integers(0, grid.n, 400)
+    dst = np.where(rng.random(400) < 0.5, grid.neighbors[src, rng.integers(0, 6, 400)],
+                   rng.integers(0, grid.n, 400))
+    slot = grid.edge_slot(src, dst)
+    for s, d, t in zip(src, dst, slot):
+        where = np.flatnonzero(grid.neighbors[s] == d)
+        assert t == (where[0] if len(where) else -1)
+
+
+def test_project_past_max_equals_the_search_over_neighbour_lists():
+    grid = NodeGrid.build(60, 80, 10, 6)
+    rng = np.random.default_rng(2)
+    past = rng.uniform(size=(2, *grid.neighbors.shape))
+    source = np.clip(np.arange(grid.n) + rng.integers(-12, 13, grid.n), 0, grid.n - 1)
+    # the definition: the weight of the edge between the two source nodes, 0 if none
+    hit = grid.neighbors[source][:, None, :] == source[grid.neighbors][:, :, None]
+    expected = np.where(hit, past[:, source, None, :], 0.0).max(axis=-1)
+    np.testing.assert_array_equal(project_past_max(past, grid, source), expected)
+
+
+def _refine_history_whole_image(history, labels, margin):
+    key = history.astype(np.int64) * (int(labels.max()) + 1) + labels.astype(np.int64)
+    lab = labels.astype(np.float32)
+    box = np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)
+    interior = cv2.dilate(lab, box) == cv2.erode(lab, box)
+    if interior.any() and not interior.all():
+        _, nearest = cv2.distanceTransformWithLabels(
+            np.where(interior, 0, 1).astype(np.uint8), cv2.DIST_L2, 3,
+            labelType=cv2.DIST_LABEL_PIXEL)
+        key = key.ravel()[np.flatnonzero(interior.ravel())[nearest.ravel() - 1]]
+    _, inv = np.unique(key.ravel(), return_inverse=True)
+    return inv.reshape(labels.shape)
+
+
+def test_refine_history_on_the_labelled_box_equals_the_whole_image():
+    rng = np.random.default_rng(3)
+    for trial in range(30):
+        labels = _blobs(rng, n=int(rng.integers(1, 5)))
+        history = rng.integers(0, 3, labels.shape).astype(np.int32)
+        margin = int(rng.integers(1, 6))
+        got = refine_history(history, labels, margin)
+        want = _refine_history_whole_image(history, labels, margin)
+        # the same partition (class numbers are a compact renumbering of the same keys)
+        pairs = np.unique(np.stack([got.ravel(), want.ravel()]), axis=1)
+        assert pairs.shape[1] == len(np.unique(got)) == len(np.unique(want))
+
+
+def test_touching_pairs_on_the_labelled_box():
+    labels = np.zeros((60, 80), np.int32)
+    labels[10:20, 10:20], labels[10:20, 22:30], labels[40:50, 60:70] = 1, 2, 3
+    assert touching_pairs(labels, reach=3) == {(1, 2)}  # columns 19 and 22
+    assert touching_pairs(labels, reach=2) == set()
+    assert touching_pairs(np.zeros((5, 5), np.int32), reach=1) == set()
+
+
+def _graph(rng, n_comp=5):
+    """A block-diagonal random graph with components of different sizes and seeds."""
+    blocks, seeds, start = [], [], 0
+    for c in range(n_comp):
+        m = int(rng.integers(3, 40))
+        a = sp.random(m, m, density=0.3, random_state=int(rng.integers(1 << 30)))
+        a = a + a.T + sp.diags(np.ones(m - 1), 1) + sp.diags(np.ones(m - 1), -1)
+        blocks.append(a)
+        seeds += list(start + rng.choice(m, size=int(rng.integers(1, 4)), replace=False))
+        start += m
+    return sp.block_diag(blocks).tocsr(), np.sort(np.array(seeds))
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_propagation_by_groups_of_components_is_exact(monkeypatch, threads):
+    monkeypatch.setattr(workers, "MAX_WORKERS", threads)
+    rng = np.random.default_rng(4)
+    w, seeds = _graph(rng)
+    b, comp, n_seeds = propagate_components(w, seeds, 30, 5, dtype=np.float32)
+    monkeypatch.setattr(workers, "MAX_WORKERS", 1)  # the reference: one call on all of W
+    whole, *_ = propagate_components(w, seeds, 30, 5, dtype=np.float32,
+                                     propagate_fn=propagate_labels)
+    np.testing.assert_array_equal(b, whole)
+    assert n_seeds.sum() == len(seeds) and b.shape == (w.shape[0], n_seeds.max())
+
+
+def test_clustering_does_not_depend_on_threads(monkeypatch):
+    rng = np.random.default_rng(5)
+    w, seeds = _graph(rng, n_comp=6)
+    b, comp, n_seeds = propagate_components(w, seeds, 30, 5)
+    nodes = np.arange(w.shape[0])
+    runs = []
+    for threads in (1, 2):
+        monkeypatch.setattr(workers, "MAX_WORKERS", threads)
+        runs.append(cluster_components(
+            b, w, comp, n_seeds, nodes, w.shape[0], 10, max_items=None, expansion=2,
+            inflation=1.15, prune=0.6, max_iters=50, stable_iters=2, dtype=np.float32))
+    np.testing.assert_array_equal(*runs)
+    assert len(np.unique(runs[0])) >= 6  # at least one cluster per component
+
+
+def test_workers_keep_order_balance_and_reraise():
+    assert workers.thread_map(lambda x: x * x, list(range(7))) == [x * x for x in range(7)]
+    groups = workers.split_work([5.0, 1.0, 4.0, 2.0, 3.0], parts=2)
+    assert sorted(i for g in groups for i in g) == [0, 1, 2, 3, 4]
+    assert all(g == sorted(g) for g in groups) and len(groups) == 2
+    assert workers.split_work([1.0], parts=3) == [[0]]
+
+    def fail():
+        raise ValueError("piece failed")
+
+    with pytest.raises(ValueError, match="piece failed"):
+        workers.run_aside(fail).result()
+    assert workers.run_aside(sum, [1, 2]).result() == 3
