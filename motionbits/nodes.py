@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["NodeGrid", "sample_bilinear", "fill_holes"]
+__all__ = ["NodeGrid", "sample_bilinear", "binary_fill_holes"]
 
 
 @dataclass(frozen=True)
@@ -113,7 +113,7 @@ def sample_bilinear(field: np.ndarray, points: np.ndarray) -> np.ndarray:
     return (top * (1 - fy) + bottom * fy).astype(np.float32)
 
 
-def fill_holes(mask: np.ndarray) -> np.ndarray:
+def binary_fill_holes(mask: np.ndarray) -> np.ndarray:
     """(H, W) bool ``mask`` with its holes filled: the background not 4-connected to the
     image border (``scipy.ndimage.binary_fill_holes``, through OpenCV's faster labelling)."""
     n, lab = cv2.connectedComponents((~mask).astype(np.uint8), connectivity=4)

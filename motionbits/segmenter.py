@@ -32,7 +32,7 @@ from motionbits.identity import identify_clusters
 from motionbits.masks import SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks
 from motionbits.merging import MotionBitGroups, observe_touching
 from motionbits.mcl import cluster_components
-from motionbits.nodes import NodeGrid, fill_holes, sample_bilinear
+from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids)
@@ -278,7 +278,7 @@ class MotionBitsSegmenter:
             # MotionBit at the last frame; enclosed holes (e.g. near a centre of rotation,
             # where points barely move but share the body's twist) are filled.
             active = (motions.displacement > cfg.move_threshold) | (prior_nodes != 0)
-            active = fill_holes(active.reshape(grid.rows, grid.cols)).ravel()
+            active = binary_fill_holes(active.reshape(grid.rows, grid.cols)).ravel()
             w = symmetric_graph(weights, grid.neighbors, keep=active)
             active_idx = np.flatnonzero(active)
 

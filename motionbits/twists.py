@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-from motionbits.nodes import fill_holes
+from motionbits.nodes import binary_fill_holes
 from motionbits.workers import thread_map
 
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
@@ -238,7 +238,7 @@ def nodes_to_fit(node_flow: np.ndarray, prior_nodes: np.ndarray, shape: tuple[in
         prior_nodes != 0)
     grown = cv2.dilate(seed.reshape(shape).astype(np.uint8), np.ones((FIT_GROWTH, FIT_GROWTH),
                                                                     np.uint8))
-    return np.flatnonzero(fill_holes(grown > 0))
+    return np.flatnonzero(binary_fill_holes(grown > 0))
 
 
 def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.ndarray,

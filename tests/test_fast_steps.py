@@ -12,7 +12,7 @@ from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
 from motionbits.mcl import cluster_components
 from motionbits.merging import touching_pairs
-from motionbits.nodes import NodeGrid, fill_holes
+from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.propagation import propagate_components, propagate_labels
 
 
@@ -24,16 +24,17 @@ def _blobs(rng, shape=(90, 120), n=4, grid=None):
     return labels
 
 
-def test_fill_holes_is_scipys():
+def test_binary_fill_holes_is_scipys():
     rng = np.random.default_rng(0)
     for density in (0.05, 0.3, 0.6):
         for _ in range(10):
             mask = ndimage.binary_dilation(rng.random((40, 50)) < density / 4, np.ones((3, 3)))
-            np.testing.assert_array_equal(fill_holes(mask), ndimage.binary_fill_holes(mask))
+            np.testing.assert_array_equal(binary_fill_holes(mask),
+                                          ndimage.binary_fill_holes(mask))
     ring = np.zeros((7, 7), bool)
     ring[1:6, 1:6] = True
     ring[3, 3] = False
-    assert fill_holes(ring)[3, 3] and not fill_holes(np.zeros((3, 3), bool)).any()
+    assert binary_fill_holes(ring)[3, 3] and not binary_fill_holes(np.zeros((3, 3), bool)).any()
 
 
 def test_edge_slot_finds_each_neighbour_and_nothing_else():
