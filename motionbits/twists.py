@@ -19,7 +19,7 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.nodes import binary_fill_holes
-from motionbits.workers import MAX_WORKERS, thread_map
+from motionbits.workers import thread_map
 
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
            "rigid_matrix", "nodes_to_fit", "refine_rigid_motion", "refine_moving_motions"]
@@ -30,8 +30,6 @@ FIT_SEED_FRACTION = 0.5
 #: Fast path: side (nodes) of the square by which the seeds are grown -- 5 = two rings of
 #: the grid, a node's neighbourhood and the neighbourhoods of those.
 FIT_GROWTH = 5
-#: Neighbourhood fits are split over the shared thread pool in pieces of at least this many.
-FIT_CHUNK = 1024
 #: Side (px) of the square by which a MotionBit's mask is eroded before its motion is
 #: refined on the images: boundary pixels mix two motions.
 REFINE_ERODE = 5
@@ -147,11 +145,8 @@ def fit_local_motions(
     n = points.shape[0]
     fit = np.arange(n) if nodes is None else np.asarray(nodes, np.int64)
     idx = np.concatenate([fit[:, None], neighbors[fit]], axis=1)  # (n', m)
-    # every neighbourhood is fitted on its own: large sets are split over the shared pool
-    parts = thread_map(lambda rows: (fit_fn or _fit_neighbourhoods)(
-        points, back_points, rows, weights, inlier_threshold, dtype),
-        np.array_split(idx, max(1, min(MAX_WORKERS, len(idx) // FIT_CHUNK))))
-    angle, trans, inliers = (np.concatenate(v) for v in zip(*parts))
+    angle, trans, inliers = (fit_fn or _fit_neighbourhoods)(points, back_points, idx, weights,
+                                                            inlier_threshold, dtype)
     if nodes is not None:
         angle_all = np.zeros(n)
         trans_all = (back_points - points).astype(np.float64)
