@@ -40,7 +40,6 @@ from motionbits.retirement import Origin, retire
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
-from motionbits.workers import run_aside
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
 
@@ -342,9 +341,7 @@ class MotionBitsSegmenter:
                    for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
-            # the temporal state is folded while the reported twists are refined
-            folding = run_aside(self._temporal.fold, raw, labels,
-                                margin=int(np.ceil(max(grid.cell))))
+            self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._prev, self._prev_gray = cur, cur_g
@@ -352,7 +349,6 @@ class MotionBitsSegmenter:
             # (flow reads rotations low)
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
                                                   moving)
-            folding.result()
             result = build_result(self.frame_index, labels, node_ids, ids, thetas, trans,
                                   moving, rep, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

@@ -4,17 +4,17 @@ A stream is segmented one frame at a time, but some steps hold several independe
 pieces (one ECC alignment per moving MotionBit, one MCL per connected component). Their
 heavy calls (OpenCV, BLAS, numpy's array loops) release the GIL, so on a machine with a
 free core they overlap; results do not depend on it (each piece is computed alone and
-the results are kept in order). A piece never waits on the pool itself (no nesting).
+the results are kept in order).
 """
 
 from __future__ import annotations
 
 import os
 import threading
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from typing import Callable, Sequence, TypeVar
 
-__all__ = ["thread_map", "run_aside", "split_work", "MAX_WORKERS"]
+__all__ = ["thread_map", "split_work", "MAX_WORKERS"]
 
 #: Threads of the shared pool (one per core, at most 4: the pieces are few).
 MAX_WORKERS = max(1, min(4, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
@@ -40,19 +40,6 @@ def thread_map(fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
     if len(items) < 2 or MAX_WORKERS < 2:
         return [fn(x) for x in items]
     return list(_shared_pool().map(fn, items))
-
-
-def run_aside(fn: Callable[..., R], *args, **kwargs) -> Future:
-    """Start ``fn(*args, **kwargs)`` on the shared pool (at once, inline, with one core);
-    ``.result()`` of the returned future waits for it and re-raises its error."""
-    if MAX_WORKERS < 2:
-        done: Future = Future()
-        try:
-            done.set_result(fn(*args, **kwargs))
-        except BaseException as exc:  # handed to the caller at .result(), as a pool would
-            done.set_exception(exc)
-        return done
-    return _shared_pool().submit(fn, *args, **kwargs)
 
 
 def split_work(costs: Sequence[float], parts: int = MAX_WORKERS) -> list[list[int]]:
