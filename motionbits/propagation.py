@@ -6,8 +6,6 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from motionbits.workers import split_work, thread_map
-
 __all__ = ["grid_seeds", "propagate_components", "propagate_labels", "row_stochastic"]
 
 
@@ -90,23 +88,6 @@ def propagate_components(w: sp.csr_matrix, seeds: np.ndarray, iters: int, reseed
     starts = np.searchsorted(seed_comp[order], seed_comp[order])
     classes = np.empty(len(seeds), np.int64)
     classes[order] = np.arange(len(seeds)) - starts
-    n_seeds = np.bincount(seed_comp, minlength=n_comp)
-    propagate = propagate_fn or propagate_labels
-    # paint stays in its component: groups of components of similar cost (nodes x seeds)
-    # are propagated side by side, each on its own rows and columns of W (same numbers)
-    groups = split_work((np.bincount(comp, minlength=n_comp) * n_seeds).tolist())
-    if len(groups) < 2 or len(seeds) == 0:
-        return propagate(w, seeds, iters, reseed_every, dtype=dtype, classes=classes), comp, n_seeds
-    w = w.tocsr()
-    b = np.zeros((w.shape[0], int(classes.max()) + 1), dtype)
-
-    def run(group: list[int]) -> tuple[np.ndarray, np.ndarray]:
-        rows = np.flatnonzero(np.isin(comp, group))  # increasing: rows keep their order
-        mine = np.isin(seed_comp, group)
-        local = np.searchsorted(rows, seeds[mine])
-        return rows, propagate(w[rows][:, rows], local, iters, reseed_every, dtype=dtype,
-                               classes=classes[mine])
-
-    for rows, part in thread_map(run, groups):
-        b[rows, :part.shape[1]] = part
-    return b, comp, n_seeds
+    b = (propagate_fn or propagate_labels)(w, seeds, iters, reseed_every, dtype=dtype,
+                                           classes=classes)
+    return b, comp, np.bincount(seed_comp, minlength=n_comp)
