@@ -25,8 +25,6 @@ import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components
 
-from motionbits.workers import split_work, thread_map
-
 __all__ = ["markov_cluster", "markov_cluster_coarse", "normalize_rows", "normalized_similarity",
            "attractor_labels", "cluster_components", "cluster_component"]
 
@@ -275,23 +273,14 @@ def cluster_components(b: np.ndarray, w, comp: np.ndarray, n_seeds: np.ndarray,
     painted_total = int((b.sum(axis=1) > 0).sum())
     node_cluster = np.zeros(n_nodes, np.int64)
     n_comp = len(n_seeds)
-    sizes = np.bincount(comp, minlength=n_comp)
-    members_of = np.split(np.argsort(comp, kind="stable"), np.cumsum(sizes)[:-1]) if n_comp else []
-
-    def cluster_group(group: list[int]) -> list[np.ndarray]:
-        return [cluster_component(
-            b[members_of[c], :n_seeds[c]], w, members_of[c], nodes[members_of[c]],
-            painted_total, cols, max_items=max_items, expansion=expansion,
-            inflation=inflation, prune=prune, max_iters=max_iters, stable_iters=stable_iters,
-            dtype=dtype, block_fn=block_fn) for c in group]
-
-    # components are independent: a few groups of similar cost (~ size^2) run side by side
-    groups = split_work((sizes.astype(np.float64) ** 2).tolist())
-    clusters: dict[int, np.ndarray] = {}
-    for group, found in zip(groups, thread_map(cluster_group, groups)):
-        clusters.update(zip(group, found))
+    members_of = np.split(np.argsort(comp, kind="stable"),
+                          np.cumsum(np.bincount(comp, minlength=n_comp))[:-1]) if n_comp else []
     for c, members in enumerate(members_of):
-        node_cluster[nodes[members]] = clusters[c] + node_cluster.max()
+        cluster = cluster_component(
+            b[members, :n_seeds[c]], w, members, nodes[members], painted_total, cols,
+            max_items=max_items, expansion=expansion, inflation=inflation, prune=prune,
+            max_iters=max_iters, stable_iters=stable_iters, dtype=dtype, block_fn=block_fn)
+        node_cluster[nodes[members]] = cluster + node_cluster.max()
     return node_cluster
 
 

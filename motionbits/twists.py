@@ -19,7 +19,6 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.nodes import binary_fill_holes
-from motionbits.workers import thread_map
 
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
            "rigid_matrix", "nodes_to_fit", "refine_rigid_motion", "refine_moving_motions"]
@@ -319,13 +318,10 @@ def refine_moving_motions(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: n
     inner = cv2.erode(labels.astype(np.float32), np.ones((REFINE_ERODE, REFINE_ERODE), np.uint8))
     inner = inner.astype(np.int32)
     boxes = ndimage.find_objects(inner, max_label=max(int(ids[k]) for k in todo))
-    todo = [k for k in todo if boxes[int(ids[k]) - 1] is not None]
-
-    def refine(k: int) -> tuple[float, np.ndarray]:
-        return _refine_in_box(cur_gray, prev_gray, inner, int(ids[k]), boxes[int(ids[k]) - 1],
-                              thetas[k], trans[k], iterations=REFINE_ITERATIONS,
-                              margin=REFINE_MARGIN)
-
-    for k, (th, t) in zip(todo, thread_map(refine, todo)):  # one ECC per MotionBit, overlapped
-        thetas[k], trans[k] = th, t
+    for k in todo:
+        box = boxes[int(ids[k]) - 1]
+        if box is not None:
+            thetas[k], trans[k] = _refine_in_box(cur_gray, prev_gray, inner, int(ids[k]), box,
+                                                 thetas[k], trans[k], iterations=REFINE_ITERATIONS,
+                                                 margin=REFINE_MARGIN)
     return thetas, trans
