@@ -1,22 +1,17 @@
 """The speed-ups of the per-frame steps give the same numbers as the plain computations
-they replace (whole-image, one-piece, single-threaded)."""
+they replace (whole image, scipy, a search over the neighbour lists)."""
 
 import cv2
 import numpy as np
-import pytest
-import scipy.sparse as sp
 from scipy import ndimage
 
-from motionbits import workers
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
-from motionbits.mcl import cluster_components
 from motionbits.merging import touching_pairs
 from motionbits.nodes import NodeGrid, binary_fill_holes
-from motionbits.propagation import propagate_components, propagate_labels
 
 
-def _blobs(rng, shape=(90, 120), n=4, grid=None):
+def _blobs(rng, shape=(90, 120), n=4):
     labels = np.zeros(shape, np.int32)
     for k in range(n):
         y, x = rng.integers(0, shape[0]), rng.integers(0, shape[1])
@@ -93,59 +88,3 @@ def test_touching_pairs_on_the_labelled_box():
     assert touching_pairs(labels, reach=3) == {(1, 2)}  # columns 19 and 22
     assert touching_pairs(labels, reach=2) == set()
     assert touching_pairs(np.zeros((5, 5), np.int32), reach=1) == set()
-
-
-def _graph(rng, n_comp=5):
-    """A block-diagonal random graph with components of different sizes and seeds."""
-    blocks, seeds, start = [], [], 0
-    for c in range(n_comp):
-        m = int(rng.integers(3, 40))
-        a = sp.random(m, m, density=0.3, random_state=int(rng.integers(1 << 30)))
-        a = a + a.T + sp.diags(np.ones(m - 1), 1) + sp.diags(np.ones(m - 1), -1)
-        blocks.append(a)
-        seeds += list(start + rng.choice(m, size=int(rng.integers(1, 4)), replace=False))
-        start += m
-    return sp.block_diag(blocks).tocsr(), np.sort(np.array(seeds))
-
-
-@pytest.mark.parametrize("threads", [1, 2])
-def test_propagation_by_groups_of_components_is_exact(monkeypatch, threads):
-    monkeypatch.setattr(workers, "MAX_WORKERS", threads)
-    rng = np.random.default_rng(4)
-    w, seeds = _graph(rng)
-    b, comp, n_seeds = propagate_components(w, seeds, 30, 5, dtype=np.float32)
-    monkeypatch.setattr(workers, "MAX_WORKERS", 1)  # the reference: one call on all of W
-    whole, *_ = propagate_components(w, seeds, 30, 5, dtype=np.float32,
-                                     propagate_fn=propagate_labels)
-    np.testing.assert_array_equal(b, whole)
-    assert n_seeds.sum() == len(seeds) and b.shape == (w.shape[0], n_seeds.max())
-
-
-def test_clustering_does_not_depend_on_threads(monkeypatch):
-    rng = np.random.default_rng(5)
-    w, seeds = _graph(rng, n_comp=6)
-    b, comp, n_seeds = propagate_components(w, seeds, 30, 5)
-    nodes = np.arange(w.shape[0])
-    runs = []
-    for threads in (1, 2):
-        monkeypatch.setattr(workers, "MAX_WORKERS", threads)
-        runs.append(cluster_components(
-            b, w, comp, n_seeds, nodes, w.shape[0], 10, max_items=None, expansion=2,
-            inflation=1.15, prune=0.6, max_iters=50, stable_iters=2, dtype=np.float32))
-    np.testing.assert_array_equal(*runs)
-    assert len(np.unique(runs[0])) >= 6  # at least one cluster per component
-
-
-def test_workers_keep_order_balance_and_reraise():
-    assert workers.thread_map(lambda x: x * x, list(range(7))) == [x * x for x in range(7)]
-    groups = workers.split_work([5.0, 1.0, 4.0, 2.0, 3.0], parts=2)
-    assert sorted(i for g in groups for i in g) == [0, 1, 2, 3, 4]
-    assert all(g == sorted(g) for g in groups) and len(groups) == 2
-    assert workers.split_work([1.0], parts=3) == [[0]]
-
-    def fail():
-        raise ValueError("piece failed")
-
-    with pytest.raises(ValueError, match="piece failed"):
-        workers.run_aside(fail).result()
-    assert workers.run_aside(sum, [1, 2]).result() == 3
