@@ -60,6 +60,17 @@ class LocalMotions:
     inliers: np.ndarray
 
 
+def _sum_last(a: np.ndarray) -> np.ndarray:
+    """``a.sum(-1)`` over a short last axis (a neighbourhood's points), as numpy sums fewer
+    than 8 numbers -- in order -- but without its per-row overhead."""
+    if a.shape[-1] >= 8 or a.shape[-1] < 2:
+        return a.sum(-1)
+    out = a[..., 0] + a[..., 1]
+    for j in range(2, a.shape[-1]):
+        out += a[..., j]
+    return out
+
+
 def kabsch_2d(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Weighted least-squares rigid motion q ~ R(theta) p + t, batched.
 
@@ -71,17 +82,29 @@ def kabsch_2d(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, 
     Returns:
         theta (...,) and t (..., 2).
     """
-    ws = w.sum(-1, keepdims=True)
+    ws = w.sum(-1)
     ws_safe = np.where(ws > 0, ws, 1.0)
-    pm = (w[..., None] * p).sum(-2) / ws_safe
-    qm = (w[..., None] * q).sum(-2) / ws_safe
-    pc = p - pm[..., None, :]
-    qc = q - qm[..., None, :]
-    cross = (w * (pc[..., 0] * qc[..., 1] - pc[..., 1] * qc[..., 0])).sum(-1)
-    dot = (w * (pc[..., 0] * qc[..., 0] + pc[..., 1] * qc[..., 1])).sum(-1)
+    px, py, qx, qy = p[..., 0], p[..., 1], q[..., 0], q[..., 1]
+    if p.shape[-2] < 8:  # a few points each (neighbourhoods): summed in order, per coordinate
+
+        def mean(v: np.ndarray) -> np.ndarray:
+            total = w[..., 0] * v[..., 0]
+            for j in range(1, v.shape[-1]):
+                total += w[..., j] * v[..., j]
+            return total / ws_safe
+
+        pmx, pmy, qmx, qmy = mean(px), mean(py), mean(qx), mean(qy)
+    else:
+        pm = (w[..., None] * p).sum(-2) / ws_safe[..., None]
+        qm = (w[..., None] * q).sum(-2) / ws_safe[..., None]
+        pmx, pmy, qmx, qmy = pm[..., 0], pm[..., 1], qm[..., 0], qm[..., 1]
+    pcx, pcy = px - pmx[..., None], py - pmy[..., None]
+    qcx, qcy = qx - qmx[..., None], qy - qmy[..., None]
+    cross = _sum_last(w * (pcx * qcy - pcy * qcx))
+    dot = _sum_last(w * (pcx * qcx + pcy * qcy))
     theta = np.arctan2(cross, dot)
     c, s = np.cos(theta), np.sin(theta)
-    t = qm - np.stack([c * pm[..., 0] - s * pm[..., 1], s * pm[..., 0] + c * pm[..., 1]], -1)
+    t = np.stack([qmx - (c * pmx - s * pmy), qmy - (s * pmx + c * pmy)], -1)
     return theta, t
 
 
@@ -201,7 +224,7 @@ def _fit_neighbourhoods(points, back_points, idx, weights, inlier_threshold, dty
     # MSAC cost: inliers pay their squared residual, outliers a constant
     capped = np.minimum(r2, tau2, out=rx)
     capped *= w[:, None, :]
-    cost = capped.sum(-1) + 1e-9 * np.arange(len(pairs))
+    cost = _sum_last(capped) + 1e-9 * np.arange(len(pairs))
     best = np.argmin(cost, axis=1)
     inliers = r2[np.arange(n), best] < tau2  # (n, m)
     fit_w = weights.astype(np.float64)[idx] * inliers
