@@ -49,7 +49,8 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
         h, w = labels.shape
         box = (slice(max(rows[0] - grow, 0), min(rows[-1] + grow + 1, h)),
                slice(max(cols[0] - grow, 0), min(cols[-1] + grow + 1, w)))
-        lab = labels[box].astype(np.float32)
+        # morphology on uint16 where the ids fit (twice as fast), else float32 (exact < 2^24)
+        lab = labels[box].astype(np.uint16 if labels.max() < 1 << 16 else np.float32)
         square = np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)
         interior = cv2.dilate(lab, square) == cv2.erode(lab, square)
         if interior.any() and not interior.all():

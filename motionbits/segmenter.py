@@ -230,9 +230,9 @@ class MotionBitsSegmenter:
 
         with self._stage("carry"):
             # pixels whose backward target leaves the image come back inf or nan (remap
-            # interpolates the inf border): treat both as "no reliable flow"
-            fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
-                                   nan=FB_ERROR_CAP, posinf=FB_ERROR_CAP)
+            # interpolates the inf border): treat both as "no reliable flow" (fmin: the cap)
+            fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd),
+                             np.float32(FB_ERROR_CAP))
             # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
@@ -254,7 +254,7 @@ class MotionBitsSegmenter:
             hist_nodes = history[ix[:, 1], ix[:, 0]]
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             seen_pts = pts + sample_bilinear(flow_back, pts)  # where the nodes came from
-            node_err = sample_bilinear(np.minimum(fb_err, FB_ERROR_CAP)[..., None], pts)[:, 0]
+            node_err = sample_bilinear(fb_err[..., None], pts)[:, 0]
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow
