@@ -35,7 +35,7 @@ from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
-    MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids)
+    MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids, twist_sources)
 from motionbits.retirement import Origin, retire
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
@@ -346,9 +346,10 @@ class MotionBitsSegmenter:
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._prev, self._prev_gray = cur, cur_g
             # the twists reported: each moving MotionBit's motion refined on its own pixels
-            # (flow reads rotations low)
+            # (flow reads rotations low) -- those a shown MotionBit reports
+            reported = set(twist_sources(node_ids, ids, rep).values())
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
-                                                  moving)
+                                                  moving & reported)
             result = build_result(self.frame_index, labels, node_ids, ids, thetas, trans,
                                   moving, rep, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
