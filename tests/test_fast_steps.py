@@ -9,6 +9,7 @@ from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
 from motionbits.merging import touching_pairs
 from motionbits.nodes import NodeGrid, binary_fill_holes
+from motionbits.records import twist_sources
 
 
 def _blobs(rng, shape=(90, 120), n=4):
@@ -88,3 +89,11 @@ def test_touching_pairs_on_the_labelled_box():
     assert touching_pairs(labels, reach=3) == {(1, 2)}  # columns 19 and 22
     assert touching_pairs(labels, reach=2) == set()
     assert touching_pairs(np.zeros((5, 5), np.int32), reach=1) == set()
+
+
+def test_twist_sources_are_the_largest_members_with_motion():
+    node_ids = np.array([0, 1, 1, 2, 2, 2, 3, 4, 4, 4, 4, 5])
+    rep = {1: 1, 2: 1, 3: 3, 4: 0, 5: 5}  # 2 joins 1; 4 is not shown
+    # 2 has the most nodes of group 1; 5 has no motion this frame (no cluster)
+    assert twist_sources(node_ids, np.array([1, 2, 3, 4]), rep) == {1: 2, 3: 3}
+    assert twist_sources(node_ids, np.array([1, 3]), rep) == {1: 1, 3: 3}
