@@ -58,8 +58,10 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
             _, nearest = cv2.distanceTransformWithLabels(
                 src, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
             interior_flat = np.flatnonzero(interior.ravel())
-            sub = key[box]
-            key[box] = sub.ravel()[interior_flat[nearest.ravel() - 1]].reshape(sub.shape)
+            edge = np.flatnonzero(~interior.ravel())  # interior pixels are their own nearest
+            sub = key[box].ravel()  # a copy: the box is not contiguous in ``key``
+            sub[edge] = sub[interior_flat[nearest.ravel()[edge] - 1]]
+            key[box] = sub.reshape(interior.shape)
     # compact renumbering by rank; class 0 stays "background in every map"
     if key.max() < 4 * key.size:  # a table lookup, without np.unique's sort
         present = np.zeros(int(key.max()) + 1, np.int64)
