@@ -54,6 +54,8 @@ _RANGES = {
     "photo_weight": "[0, inf)",
     "flow_texture": "(0, inf)",
     "pixel_evidence": "[0, inf)",
+    "edge_band": "[0, inf)",
+    "relight_sigma": "[0, inf)",
     "match_iou": "[0, 1]",
     "merge_agree": "[0, inf)",
     "merge_disagree": "[0, inf)",
@@ -149,6 +151,13 @@ class MotionBitsConfig:
     # MotionBit's motion once explained that pixel better than "static" by this many grey
     # levels (3x3 mean) -- a label smeared onto a flat static region does not persist
     pixel_evidence: float = 3.0
+    # ours (evidence.static_residual): "nothing moved" also explains a pixel whose change
+    # a smooth brightness gain explains -- a moving shadow, flicker, exposure -- with the
+    # gain's smoothness this many grid cells (Gaussian sigma); 0 = compare grey levels only
+    relight_sigma: float = 3.0
+    # ours (masks.snap_to_edges): each shown mask is trimmed back to the strongest image
+    # edge within this many grid cells of its outline (0 = off; the state is not trimmed)
+    edge_band: float = 1.0
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
     # ours (motionbits/merging.py): touching MotionBits are one body when one affine motion
     # explains the images of both within merge_agree grey levels of their own motions (at

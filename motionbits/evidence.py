@@ -23,7 +23,13 @@ import numpy as np
 from motionbits.flow import sample_maps
 
 __all__ = ["pull_back", "gradient_magnitude", "appearance_consistent", "motion_gain",
-           "photometric_residual"]
+           "photometric_residual", "static_residual"]
+
+#: Grey levels added before taking logs of intensities (dark pixels have noisy ratios).
+LOG_OFFSET = 8.0
+#: The brightness gain of :func:`static_residual` is estimated at this fraction of the
+#: resolution (it is smooth over several grid cells).
+GAIN_SCALE = 4
 
 
 def pull_back(prev_gray: np.ndarray, flow_back: np.ndarray) -> np.ndarray:
@@ -62,17 +68,43 @@ def appearance_consistent(cur_gray: np.ndarray, pulled: np.ndarray, gradient: np
     return resid < tolerance + gradient_gain * gradient
 
 
-def motion_gain(cur_gray: np.ndarray, prev_gray: np.ndarray, pulled: np.ndarray,
+def static_residual(cur_gray: np.ndarray, prev_gray: np.ndarray, sigma: float) -> np.ndarray:
+    """(H, W) float32 grey levels by which "nothing moved, only the light changed" misses
+    each pixel: the smaller of ``|I_t - I_t-1|`` and ``|I_t - g I_t-1|``, with ``log g``
+    the Gaussian (``sigma`` px) mean of the per-pixel log ratio ``log I_t - log I_t-1``.
+
+    A moving shadow, a flicker or an exposure change darkens or brightens the static
+    texture under it by a smooth factor, so the second residual stays small there; a
+    moving body replaces the texture under it, which no smooth gain explains.
+
+    Args:
+        cur_gray, prev_gray: (H, W) float32 grey frames in [0, 255] (``prev_gray``
+            camera-stabilised).
+        sigma: px, smoothness of the gain field.
+    """
+    # the gain field is smooth: it is estimated at 1/GAIN_SCALE of the resolution
+    h, w = cur_gray.shape
+    log_ratio = cv2.log(cur_gray + LOG_OFFSET) - cv2.log(prev_gray + LOG_OFFSET)
+    small = cv2.resize(log_ratio, (max(w // GAIN_SCALE, 1), max(h // GAIN_SCALE, 1)),
+                       interpolation=cv2.INTER_AREA)
+    small = cv2.GaussianBlur(small, (0, 0), max(sigma / GAIN_SCALE, 0.5))
+    gain = cv2.exp(cv2.resize(small, (w, h), interpolation=cv2.INTER_LINEAR))
+    relit = cv2.absdiff(cur_gray, cv2.multiply(prev_gray, gain))
+    return np.minimum(np.abs(cur_gray - prev_gray), relit)
+
+
+def motion_gain(still: np.ndarray, cur_gray: np.ndarray, pulled: np.ndarray,
                 window: int) -> np.ndarray:
     """(H, W) float32 grey levels by which the flow explains each pixel's ``window``
-    neighbourhood better than "nothing moved": mean |I_t - I_t-1| - mean |I_t - pulled|.
+    neighbourhood better than "nothing moved": mean ``still`` - mean |I_t - pulled|, with
+    ``still`` the per-pixel residual of "nothing moved" (:func:`static_residual`).
 
     Motion is only observable where the image changes: on textureless regions the flow is
     interpolated from nearby edges -- often from a moving body next to them -- and both
     hypotheses explain the pixels equally well, so the gain is ~0. Uniform interiors of
     moving bodies get ~0 too, so a birth test averages it over a whole cluster.
     """
-    return cv2.blur(np.abs(cur_gray - prev_gray) - np.abs(cur_gray - pulled), (window, window))
+    return cv2.blur(still - np.abs(cur_gray - pulled), (window, window))
 
 
 def photometric_residual(cur: np.ndarray, prev: np.ndarray, motion: np.ndarray,

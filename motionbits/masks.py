@@ -17,7 +17,8 @@ from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
 from motionbits.twists import kabsch_2d, rigid_matrix
 
-__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "SPECK_CELLS"]
+__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "snap_to_edges",
+           "SPECK_CELLS"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -85,7 +86,7 @@ def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
                   trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
-                  prev_gray: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
+                  prev_gray: np.ndarray, still: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
                   texture: np.ndarray, earned: np.ndarray, *, bonus: float, photo_weight: float,
                   evidence: float, kept: np.ndarray, ambiguous: float
                   ) -> tuple[np.ndarray, np.ndarray]:
@@ -105,6 +106,8 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
             (K, 2).
         flow_back: (H, W, 2) flow current -> previous.
         cur_gray, prev_gray: (H, W) float32 grey frames.
+        still: (H, W) float32 grey levels by which "nothing moved" misses each pixel
+            (:func:`motionbits.evidence.static_residual`).
         prior: (H, W) int32 last frame's label map carried to this frame.
         prior_valid: (H, W) bool, where ``prior`` is trustworthy (consistent flow).
         texture: (H, W) float32 in [0, 1], weight of the flow residual (1 = textured pixel
@@ -129,7 +132,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     """
     h, w = flow_back.shape[:2]
     window = PHOTO_WINDOW
-    static_photo = cv2.blur(np.abs(cur_gray - prev_gray), (window, window))
+    static_photo = cv2.blur(still, (window, window))
     static_cost = texture * cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + (
         photo_weight * static_photo)
     # last frame's label is credited where it was carried consistently; against the
@@ -206,3 +209,44 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
             out[box][np.isin(comp, small)] = 0
     return out
 
+
+
+def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:
+    """Trim each mask's outline, within ``band`` px of where the motion put it, back to
+    the strongest image edge (marker-based watershed on the colour frame).
+
+    Flow is smooth across motion boundaries and the photometric test is blind where both
+    sides are flat, so a mask can overhang its body by a few pixels (a halo on the flat
+    table along a moving arm). A pixel more than ``band`` px inside a mask (or on its
+    medial axis, so thin parts keep a marker) keeps its label, a pixel more than ``band``
+    px from every mask is background, and the band between is flooded from both by image
+    gradient. Only pixels that the flood gives to the background (or to another label)
+    are taken from a mask: nothing is added, so a texture edge outside a mask cannot
+    grow it.
+
+    Args:
+        label_map: (H, W) int32 labels (0 = background).
+        rgb: (H, W, 3) uint8 frame at the same size.
+        band: px (0 = return ``label_map`` unchanged).
+
+    Returns:
+        (H, W) int32 label map, each mask a subset of its mask in ``label_map``.
+    """
+    if band < 1 or not label_map.any():
+        return label_map
+    markers = np.zeros(label_map.shape, np.int32)
+    near = cv2.dilate((label_map > 0).astype(np.uint8), cv2.getStructuringElement(
+        cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1)))
+    markers[near == 0] = 1
+    for i, box in enumerate(ndimage.find_objects(label_map)):
+        if box is None:
+            continue
+        rows = slice(max(box[0].start - 1, 0), box[0].stop + 1)
+        cols = slice(max(box[1].start - 1, 0), box[1].stop + 1)
+        mask = (label_map[rows, cols] == i + 1).astype(np.uint8)
+        dist = cv2.distanceTransform(mask, cv2.DIST_L2, 3)
+        core = (dist > band) | ((dist > 0) & (dist >= ndimage.maximum_filter(dist, 3)))
+        markers[rows, cols][core] = i + 2
+    flooded = cv2.watershed(np.ascontiguousarray(rgb), markers)
+    # a watershed line (-1) lies on the edge between two basins: background
+    return np.where(flooded - 1 == label_map, label_map, 0).astype(np.int32)

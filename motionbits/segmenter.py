@@ -18,7 +18,7 @@ from motionbits.backend import make_ops
 from motionbits.camera import compensate_camera
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
-    appearance_consistent, gradient_magnitude, motion_gain, pull_back)
+    appearance_consistent, gradient_magnitude, motion_gain, pull_back, static_residual)
 from motionbits.flow import FlowBackend, check_flow, forward_backward_error, make_flow
 from motionbits.graph import (
     apply_temporal_constraints,
@@ -29,7 +29,8 @@ from motionbits.graph import (
     twist_edge_weights,
 )
 from motionbits.identity import identify_clusters
-from motionbits.masks import SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks
+from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks,
+                              snap_to_edges)
 from motionbits.merging import MotionBitGroups, observe_touching
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
@@ -56,8 +57,8 @@ MIN_SHOWN_CELLS = 4
 #: backend alone (both directions, validated); "carry" is the work on the two flows before
 #: the twists: forward-backward error, grey frames, the previous frame pulled back, image
 #: gradients, where a carried label still holds, and the labels and their history carried.
-STAGES = ("resize", "flow", "carry", "twists", "graph", "propagation", "clustering", "masks", "merging",
-          "bookkeeping")
+STAGES = ("resize", "flow", "carry", "twists", "graph", "propagation", "clustering", "masks",
+          "merging", "bookkeeping")
 
 #: px: forward-backward errors are capped here (a pixel whose backward target leaves the
 #: image has an infinite or NaN error: no reliable flow).
@@ -300,7 +301,10 @@ class MotionBitsSegmenter:
                 prev_g = _gray(prev_m)  # pulling it back along flow_m gives ``pulled`` again
             # computed only if some cluster is a candidate for a new MotionBit
             win = max(EVIDENCE_WINDOW, int(round(max(grid.cell))) | 1)
-            evidence = cache(lambda: motion_gain(cur_g, prev_g, pulled, win)[ix[:, 1], ix[:, 0]])
+            # "nothing moved" explains a pixel also when only the light changed on it
+            still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
+                     if cfg.relight_sigma else np.abs(cur_g - prev_g))
+            evidence = cache(lambda: motion_gain(still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
                 node_cluster, motions.displacement, prior[ix[:, 1], ix[:, 0]], evidence,
@@ -312,7 +316,7 @@ class MotionBitsSegmenter:
             kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
             labels, earned = assign_pixels(
-                grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g,
+                grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g, still,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
                 bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
@@ -350,6 +354,9 @@ class MotionBitsSegmenter:
             reported = set(twist_sources(node_ids, ids, rep).values())
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
                                                   moving & reported)
+            # the masks shown are trimmed to the image's edges; the state keeps the
+            # motion's masks (trimming them would compound from frame to frame)
+            labels = snap_to_edges(labels, cur, int(round(cfg.edge_band * max(grid.cell))))
             result = build_result(self.frame_index, labels, node_ids, ids, thetas, trans,
                                   moving, rep, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

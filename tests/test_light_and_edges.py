@@ -1,0 +1,93 @@
+"""A change of light is not motion, and a mask ends at its body's edge (issue "Only what
+moved": moving shadows, halos on flat backgrounds)."""
+
+import cv2
+import numpy as np
+import pytest
+
+from motionbits import MotionBitsConfig, segment_video
+from motionbits.evidence import static_residual
+from motionbits.masks import snap_to_edges
+from motionbits.synth.planar import Body, Polygon, render_planar_clip
+
+SIZE = (240, 320)
+CONFIG = MotionBitsConfig(n_nodes=2500, max_side=max(SIZE))
+
+
+def _texture(seed: int, scale: int = 4) -> np.ndarray:
+    """(240, 320, 3) uint8 random colour texture, smooth over ``scale`` px."""
+    noise = np.random.default_rng(seed).uniform(0, 255, (SIZE[0] // scale, SIZE[1] // scale, 3))
+    tex = cv2.resize(noise.astype(np.float32), SIZE[::-1], interpolation=cv2.INTER_CUBIC)
+    return np.clip(40 + 0.7 * tex, 0, 255).astype(np.uint8)
+
+
+def _shadow(center: tuple[float, float], radius: float, depth: float, soft: float = 8.0
+            ) -> np.ndarray:
+    """(240, 320) float32 brightness gain: 1 - depth inside a disk whose penumbra is a
+    logistic of scale ``soft`` px."""
+    yy, xx = np.mgrid[:SIZE[0], :SIZE[1]]
+    r = np.hypot(xx - center[0], yy - center[1])
+    return (1 - depth / (1 + np.exp((r - radius) / soft))).astype(np.float32)
+
+
+def _gray(img: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(img, cv2.COLOR_RGB2GRAY).astype(np.float32)
+
+
+def test_static_residual_explains_a_shadow_not_a_new_texture():
+    base = _texture(0)
+    shaded = np.clip(base * _shadow((160, 120), 50, 0.5)[..., None], 0, 255).astype(np.uint8)
+    replaced = base.copy()
+    replaced[70:170, 110:210] = _texture(1)[70:170, 110:210]
+    yy, xx = np.mgrid[:SIZE[0], :SIZE[1]]
+    inside = np.hypot(xx - 160, yy - 120) < 30
+    for new, small in ((shaded, True), (replaced, False)):
+        plain = np.abs(_gray(new) - _gray(base))[inside].mean()
+        relit = static_residual(_gray(new), _gray(base), 19.0)[inside].mean()
+        assert relit <= plain + 1e-4
+        if small:  # the shadow darkens by up to 50%: tens of grey levels, nearly all explained
+            assert plain > 20 and relit < 0.2 * plain, (plain, relit)
+        else:  # another texture: no smooth gain explains it
+            assert relit > 0.6 * plain, (plain, relit)
+
+
+def _shadow_clip(n_frames: int = 12) -> list[np.ndarray]:
+    base = _texture(5, scale=16)
+    return [np.clip(base * _shadow((70 + 9 * t, 120), 50, 0.55)[..., None], 0, 255)
+            .astype(np.uint8) for t in range(n_frames)]
+
+
+@pytest.mark.parametrize("relight_sigma, expect_marks", [(3.0, False), (0.0, True)])
+def test_moving_shadow_on_texture_is_not_a_motionbit(relight_sigma, expect_marks):
+    """A soft shadow (penumbra ~30 px) sweeping 9 px/frame over a static texture: with the
+    light-change test (default) it is never a MotionBit; comparing grey levels only, it is
+    (hard-edged shadows still are, see the README)."""
+    config = CONFIG.with_(relight_sigma=relight_sigma)
+    shown = [len(r.motionbits) for r in segment_video(_shadow_clip(), config)]
+    assert (max(shown) > 0) == expect_marks, shown
+
+
+def test_a_body_under_the_same_light_test_is_still_found():
+    body = Body((Polygon.rect(40, 80, 110, 150, texture_seed=3),), velocity=(6.0, 0.0))
+    clip = render_planar_clip([body], size=SIZE, n_frames=12, seed=2)
+    last = list(segment_video(clip.frames, CONFIG))[-1]
+    assert len(last.motionbits) == 1
+    truth = clip.labels[-1] == 1
+    pred = last.labels == last.motionbits[0].id
+    assert (pred & truth).sum() / (pred | truth).sum() > 0.8
+
+
+def test_snap_trims_a_halo_on_a_flat_background_and_adds_nothing():
+    frame = np.full(SIZE + (3,), 200, np.uint8)
+    frame[60:180, 100:220] = (180, 40, 40)  # a flat red body on a flat grey table
+    frame[100:110, 220:300] = (180, 40, 40)  # with a thin arm, 10 px wide
+    body = np.all(frame == (180, 40, 40), axis=2)
+    halo = cv2.dilate(body.astype(np.uint8), np.ones((9, 9), np.uint8)) > 0  # 4 px overhang
+    labels = np.where(halo, 3, 0).astype(np.int32)
+    out = snap_to_edges(labels, frame, band=7)
+    assert set(np.unique(out)) <= {0, 3}
+    assert not (out[~halo] > 0).any()  # nothing added
+    got = out == 3
+    assert (got & body).sum() / (got | body).sum() > 0.97
+    assert got[100:110, 280:295].all()  # the thin arm keeps its pixels
+    assert (snap_to_edges(labels, frame, band=0) == labels).all()
