@@ -66,8 +66,8 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
     if key.max() < 4 * key.size:  # a table lookup, without np.unique's sort
         present = np.zeros(int(key.max()) + 1, np.int64)
         present[key.ravel()] = 1
-        rank = np.cumsum(present) - (1 if present[0] else 0)
-        return rank[key].astype(np.int32)
+        rank = (np.cumsum(present) - (1 if present[0] else 0)).astype(np.int32)
+        return rank[key]
     uniq, inv = np.unique(key.ravel(), return_inverse=True)
     inv = inv + (0 if uniq[0] == 0 else 1)
     return inv.reshape(labels.shape).astype(np.int32)
