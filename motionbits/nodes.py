@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["NodeGrid", "sample_bilinear", "binary_fill_holes"]
+__all__ = ["NodeGrid", "binary_fill_holes", "sample_bilinear"]
 
 
 @dataclass(frozen=True)

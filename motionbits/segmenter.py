@@ -331,12 +331,12 @@ class MotionBitsSegmenter:
                              prev_g, disagree=cfg.merge_disagree)
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin)
-            rep = self._groups.representatives(np.unique(labels[labels > 0]))
+            area = np.bincount(labels.ravel())
+            rep = self._groups.representatives(np.flatnonzero(area[1:]) + 1)  # ids present
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown
             shown = {r for i, r in rep.items() if i not in self._tentative}
             # ... and covers at least MIN_SHOWN_CELLS grid cells (smaller ones are flow noise)
-            area = np.bincount(labels.ravel())
             group_area: dict[int, int] = {}
             for i, r in rep.items():
                 group_area[r] = group_area.get(r, 0) + int(area[i])
