@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from motionbits.nodes import NodeGrid
+
 __all__ = ["inv_sym3", "twist_noise_covariance", "local_covariances", "twist_edge_weights", "apply_temporal_constraints", "project_past_max",
            "symmetric_graph"]
 
@@ -76,13 +78,16 @@ def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.n
     Returns:
         (n, 3, 3) float64 symmetric positive-definite covariances.
     """
-    idx = np.concatenate([np.arange(len(twists))[:, None], neighbors], axis=1)
-    v = twists[idx]  # (n, m, 3)
-    vc = v - v.mean(axis=1, keepdims=True)
+    idx = np.concatenate([np.arange(len(twists))[:, None], neighbors], axis=1).T  # (m, n)
+    m = idx.shape[0]
+    vc = []  # per component, (m, n): the twists of N* about their mean
+    for i in range(3):
+        v = twists[:, i][idx]
+        vc.append(v - v.sum(axis=0) / m)
     out = noise_cov.copy()
     for i in range(3):
         for j in range(i, 3):
-            sij = (vc[..., i] * vc[..., j]).sum(1) / (idx.shape[1] - 1)
+            sij = (vc[i] * vc[j]).sum(axis=0) / (m - 1)
             out[:, i, j] += sij
             if i != j:
                 out[:, j, i] += sij
@@ -91,24 +96,27 @@ def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.n
 
 def twist_edge_weights(twists: np.ndarray, neighbors: np.ndarray, cov: np.ndarray) -> np.ndarray:
     """(n, k) weights exp(-0.5 * Mdist(i, j)^2) of the edges i -> neighbors[i, s]."""
-    diff = twists[neighbors] - twists[:, None, :]  # (n, k, 3)
+    diff = [twists[:, i][neighbors] - twists[:, i][:, None] for i in range(3)]  # (n, k) each
     prec = inv_sym3(cov)  # (n, 3, 3)
-    d2 = np.zeros(diff.shape[:2])
+    d2 = np.zeros(neighbors.shape)
     for i in range(3):
         for j in range(3):
-            d2 += diff[..., i] * prec[:, None, i, j] * diff[..., j]
-    return np.exp(-0.5 * np.maximum(d2, 0.0))
+            term = diff[i] * prec[:, i, j][:, None]
+            term *= diff[j]
+            d2 += term
+    np.maximum(d2, 0.0, out=d2)
+    d2 *= -0.5
+    return np.exp(d2, out=d2)
 
 
-def project_past_max(past_max: np.ndarray, neighbors: np.ndarray, source: np.ndarray
-                     ) -> np.ndarray:
+def project_past_max(past_max: np.ndarray, grid: NodeGrid, source: np.ndarray) -> np.ndarray:
     """Largest earlier weight of each current edge, read from the previous frame's graph at
     the nodes nearest to where the edge's endpoints came from.
 
     Args:
         past_max: (..., n, k) largest earlier weight of each edge of the previous frame's
             graph (leading axes: several such graphs, projected alike).
-        neighbors: (n, k) neighbour indices (the same grid at both frames).
+        grid: the node grid (the same at both frames); its ``neighbors`` are the edges.
         source: (n,) int index of the node nearest to where each node came from (its
             backward-flow target, e.g. :meth:`motionbits.nodes.NodeGrid.nearest_node`).
 
@@ -116,10 +124,8 @@ def project_past_max(past_max: np.ndarray, neighbors: np.ndarray, source: np.nda
         (..., n, k) float64; 0 where the edge's source endpoints are not neighbours.
     """
     si = source[:, None]
-    sj = source[neighbors]
-    hit = neighbors[si[:, 0]][:, None, :] == sj[:, :, None]  # (n, k, k)
-    vals = np.where(hit, past_max[..., si[:, 0], None, :], 0.0)
-    return vals.max(axis=-1)
+    slot = grid.edge_slot(si, source[grid.neighbors])  # (n, k)
+    return np.where(slot >= 0, past_max[..., si, np.maximum(slot, 0)], 0.0)
 
 
 def apply_temporal_constraints(weights: np.ndarray, neighbors: np.ndarray, history: np.ndarray,

@@ -41,22 +41,33 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
         (H, W) int32 classes; 0 marks pixels background in every map.
     """
     key = history.astype(np.int64) * (int(labels.max()) + 1) + labels.astype(np.int64)
-    if margin > 0:
-        lab = labels.astype(np.float32)
-        box = np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)
-        interior = cv2.dilate(lab, box) == cv2.erode(lab, box)
+    rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
+    if margin > 0 and len(rows):
+        # only the labelled box grown by 2 margin + 1 px can hold non-interior pixels, and
+        # its outer ring is interior: the whole-image result, computed on the box
+        grow = 2 * margin + 1
+        h, w = labels.shape
+        box = (slice(max(rows[0] - grow, 0), min(rows[-1] + grow + 1, h)),
+               slice(max(cols[0] - grow, 0), min(cols[-1] + grow + 1, w)))
+        # morphology on uint16 where the ids fit (twice as fast), else float32 (exact < 2^24)
+        lab = labels[box].astype(np.uint16 if labels.max() < 1 << 16 else np.float32)
+        square = np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)
+        interior = cv2.dilate(lab, square) == cv2.erode(lab, square)
         if interior.any() and not interior.all():
             src = np.where(interior, 0, 1).astype(np.uint8)
             _, nearest = cv2.distanceTransformWithLabels(
                 src, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
             interior_flat = np.flatnonzero(interior.ravel())
-            key = key.ravel()[interior_flat[nearest.ravel() - 1]].reshape(labels.shape)
+            edge = np.flatnonzero(~interior.ravel())  # interior pixels are their own nearest
+            sub = key[box].ravel()  # a copy: the box is not contiguous in ``key``
+            sub[edge] = sub[interior_flat[nearest.ravel()[edge] - 1]]
+            key[box] = sub.reshape(interior.shape)
     # compact renumbering by rank; class 0 stays "background in every map"
     if key.max() < 4 * key.size:  # a table lookup, without np.unique's sort
         present = np.zeros(int(key.max()) + 1, np.int64)
         present[key.ravel()] = 1
-        rank = np.cumsum(present) - (1 if present[0] else 0)
-        return rank[key].astype(np.int32)
+        rank = (np.cumsum(present) - (1 if present[0] else 0)).astype(np.int32)
+        return rank[key]
     uniq, inv = np.unique(key.ravel(), return_inverse=True)
     inv = inv + (0 if uniq[0] == 0 else 1)
     return inv.reshape(labels.shape).astype(np.int32)

@@ -22,7 +22,7 @@ m it never cuts a uniform column of any cluster (entries >= 1/m).
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix, csr_matrix
+from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 __all__ = ["markov_cluster", "markov_cluster_coarse", "normalize_rows", "normalized_similarity",
@@ -242,10 +242,11 @@ def markov_cluster_coarse(
 
 
 def _group_sums(group: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """(G, C) sums of the (m, C) ``rows`` over each of the G groups numbered in ``group``."""
-    g = int(group.max()) + 1
-    return csr_matrix((np.ones(len(group), rows.dtype), (group, np.arange(len(group)))),
-                      shape=(g, len(group))) @ rows
+    """(G, C) sums of the (m, C) ``rows`` over each of the G groups numbered in ``group``
+    (every group 0..G-1 present; each summed in row order)."""
+    order = np.argsort(group, kind="stable")
+    starts = np.flatnonzero(np.r_[True, np.diff(group[order]) != 0])
+    return np.add.reduceat(rows[order], starts, axis=0)
 
 
 def cluster_components(b: np.ndarray, w, comp: np.ndarray, n_seeds: np.ndarray,
@@ -275,12 +276,17 @@ def cluster_components(b: np.ndarray, w, comp: np.ndarray, n_seeds: np.ndarray,
     n_comp = len(n_seeds)
     members_of = np.split(np.argsort(comp, kind="stable"),
                           np.cumsum(np.bincount(comp, minlength=n_comp))[:-1]) if n_comp else []
+    top = 0  # clusters numbered so far
     for c, members in enumerate(members_of):
+        if n_seeds[c] == 0:  # no paint reached it: connected, so one group
+            node_cluster[nodes[members]] = top = top + 1
+            continue
         cluster = cluster_component(
             b[members, :n_seeds[c]], w, members, nodes[members], painted_total, cols,
             max_items=max_items, expansion=expansion, inflation=inflation, prune=prune,
             max_iters=max_iters, stable_iters=stable_iters, dtype=dtype, block_fn=block_fn)
-        node_cluster[nodes[members]] = cluster + node_cluster.max()
+        node_cluster[nodes[members]] = cluster + top
+        top += int(cluster.max())
     return node_cluster
 
 

@@ -47,7 +47,11 @@ def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
         labels: (H, W) int label map.
         reach: px (>= 1).
     """
-    lab = labels.astype(np.int32)
+    rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
+    if not len(rows):
+        return set()
+    # the labelled box: outside it nothing touches
+    lab = labels[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1].astype(np.int32)
     kernel = np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)
     pairs: set[tuple[int, int]] = set()
     grown_max = cv2.dilate(lab.astype(np.float32), kernel)

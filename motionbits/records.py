@@ -12,7 +12,8 @@ from motionbits.nodes import NodeGrid
 from motionbits.objects import Instance, encode_rle
 from motionbits.twists import se2_log
 
-__all__ = ["MotionBit", "MotionBitsResult", "MotionSpans", "moving_ids", "build_result"]
+__all__ = ["MotionBit", "MotionBitsResult", "MotionSpans", "moving_ids", "twist_sources",
+           "build_result"]
 
 #: One MotionBit in one frame: the shared :class:`motionbits.Instance` with ``twist``,
 #: ``moving``, ``first_moved`` and ``last_moved`` set (coordinates in input pixels; the
@@ -95,6 +96,27 @@ def moving_ids(points: np.ndarray, node_ids: np.ndarray, ids: np.ndarray, thetas
     return moving
 
 
+def twist_sources(node_ids: np.ndarray, ids: np.ndarray, rep: dict[int, int]) -> dict[int, int]:
+    """The id whose twist each shown MotionBit reports: of its group's members with a motion
+    this frame (``ids``), the one with the most nodes (the first of them on a tie).
+
+    Args:
+        node_ids: (n,) int MotionBit id of each grid node (0 = none).
+        ids: (K,) ids with a cluster (and a motion) this frame.
+        rep: id -> the id it is shown under (0 = not shown).
+
+    Returns:
+        shown id -> member id, for the shown MotionBits with a motion.
+    """
+    with_motion = {int(i) for i in ids}
+    counts = np.bincount(node_ids, minlength=max([*rep.keys(), *with_motion, 0]) + 1)
+    members: dict[int, list[int]] = {}
+    for i, r in rep.items():
+        if r and i in with_motion:
+            members.setdefault(r, []).append(i)
+    return {r: max(group, key=lambda i: counts[i]) for r, group in members.items()}
+
+
 def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids: np.ndarray,
                  thetas: np.ndarray, trans: np.ndarray, moving: set[int], rep: dict[int, int],
                  spans: MotionSpans, grid: NodeGrid, input_size: tuple[int, int]
@@ -118,15 +140,15 @@ def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids
     """
     h, w = input_size
     scale = w / grid.width, h / grid.height
-    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1)
+    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1, dtype=np.int32)
     for i, r in rep.items():
         lut[i] = r
-    out = lut[labels].astype(np.int32)
+    out = lut[labels]
     node_out = lut[np.minimum(node_ids, len(lut) - 1)] * (node_ids < len(lut))
     members: dict[int, list[int]] = {}
     for i, r in rep.items():
         members.setdefault(r, []).append(i)
-    counts = np.bincount(node_ids, minlength=len(lut))
+    source = twist_sources(node_ids, ids, rep)
     twists = {int(i): -se2_log(th, t) for i, th, t in zip(ids, thetas, trans)}
     if (h, w) != out.shape:
         out = cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)
@@ -136,8 +158,7 @@ def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids
             continue
         lab = index + 1
         group = members.get(lab, [lab])
-        with_motion = [i for i in group if i in twists]
-        tw = twists[max(with_motion, key=lambda i: counts[i])] if with_motion else np.zeros(3)
+        tw = twists[source[lab]] if lab in source else np.zeros(3)
         first = [spans.first[i] for i in group if i in spans.first]
         last = [spans.last[i] for i in group if i in spans.last]
         ys, xs = np.nonzero(out[box] == lab)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 from motionbits.twists import rigid_matrix
 
@@ -62,14 +63,18 @@ def _residual(frame: np.ndarray, motion: np.ndarray, cur: np.ndarray, box, insid
 
 
 def origin_residuals(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
-                     min_separation: float) -> tuple[float, float]:
-    """Mean grey-level residuals (world, body) of the pixels ``mask`` (H, W) bool of
+                     min_separation: float, corner: tuple[int, int] = (0, 0)
+                     ) -> tuple[float, float]:
+    """Mean grey-level residuals (world, body) of the pixels ``mask`` (bool) of
     ``cur_gray`` against the origin frame pulled back by the static world's and by the
     MotionBit's accumulated motion; NaN when the two motions move its pixels less than
-    ``min_separation`` px apart (nothing to tell) or its origin is out of view."""
+    ``min_separation`` px apart (nothing to tell) or its origin is out of view.
+
+    ``mask`` is (H, W), or the image box whose top-left pixel is ``corner`` (y, x)."""
     ys, xs = np.nonzero(mask)
     if len(xs) == 0:
         return np.nan, np.nan
+    ys, xs = ys + corner[0], xs + corner[1]
     step = max(1, len(xs) // SEPARATION_SAMPLES)
     pts = np.stack([xs[::step], ys[::step], np.ones(len(xs[::step]))]).astype(np.float64)
 
@@ -80,25 +85,26 @@ def origin_residuals(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
     if np.median(np.linalg.norm(apply(origin.body) - apply(origin.world), axis=0)) < min_separation:
         return np.nan, np.nan
     box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
-    inside = mask[box]
+    inside = mask[box[0].start - corner[0]:box[0].stop - corner[0],
+                  box[1].start - corner[1]:box[1].stop - corner[1]]
     return (_residual(origin.frame, origin.world, cur_gray, box, inside),
             _residual(origin.frame, origin.body, cur_gray, box, inside))
 
 
 def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
-                   min_separation: float) -> float:
+                   min_separation: float, corner: tuple[int, int] = (0, 0)) -> float:
     """Grey levels by which the MotionBit's own accumulated motion explains its pixels
-    ``mask`` (H, W) bool in ``cur_gray`` better than the static world's motion does
-    (negative: it never moved); NaN as in :func:`origin_residuals`."""
-    world, body = origin_residuals(origin, cur_gray, mask, min_separation)
+    ``mask`` (bool) in ``cur_gray`` better than the static world's motion does
+    (negative: it never moved); NaN and ``corner`` as in :func:`origin_residuals`."""
+    world, body = origin_residuals(origin, cur_gray, mask, min_separation, corner)
     return world - body
 
 
-def _world_residual(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray) -> float:
-    """:func:`_residual` of the static world's motion over the pixels ``mask``."""
-    ys, xs = np.nonzero(mask)
-    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
-    return _residual(origin.frame, origin.world, cur_gray, box, mask[box])
+def _world_residual(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
+                    box: tuple[slice, slice]) -> float:
+    """:func:`_residual` of the static world's motion over the pixels ``mask`` of the
+    image box ``box``."""
+    return _residual(origin.frame, origin.world, cur_gray, box, mask)
 
 
 def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
@@ -136,22 +142,23 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
     world = np.eye(3) if cam is None else cam
     own = {int(i): world @ np.vstack([rigid_matrix(th, t), [0.0, 0.0, 1.0]])
            for i, th, t in zip(ids, thetas, trans)}
-    present = set(np.unique(labels[labels > 0]).tolist())
-    origins = {i: o for i, o in origins.items() if i in present}
+    boxes = {i + 1: box for i, box in enumerate(ndimage.find_objects(labels)) if box}
+    origins = {i: o for i, o in origins.items() if i in boxes}
     out = labels
     if first is not None:
         first.advance(world, world)
-    for i in sorted(present):
+    for i, box in boxes.items():
         if i >= first_new:
             origins[i] = Origin(prev_gray, np.eye(3), np.eye(3))
         origin = origins.get(i)
         if origin is None:
             continue
         origin.advance(own.get(i, world), world)
-        mask = labels == i
-        world_res, body_res = origin_residuals(origin, cur_gray, mask, MIN_SEPARATION)
+        mask = labels[box] == i
+        world_res, body_res = origin_residuals(origin, cur_gray, mask, MIN_SEPARATION,
+                                               (box[0].start, box[1].start))
         if first is not None and np.isfinite(body_res):
-            from_first = _world_residual(first, cur_gray, mask)
+            from_first = _world_residual(first, cur_gray, mask, box)  # box: find_objects
             if np.isnan(world_res) or from_first < world_res:  # NaN: out of view then
                 world_res = from_first
         if world_res < explained and world_res - body_res < -margin:

@@ -12,7 +12,6 @@ from typing import Iterator
 
 import cv2
 import numpy as np
-from scipy import ndimage
 from threadpoolctl import ThreadpoolController
 
 from motionbits.backend import make_ops
@@ -34,10 +33,10 @@ from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, r
                               snap_to_edges)
 from motionbits.merging import MotionBitGroups, observe_touching
 from motionbits.mcl import cluster_components
-from motionbits.nodes import NodeGrid, sample_bilinear
+from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
-    MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids)
+    MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids, twist_sources)
 from motionbits.retirement import Origin, retire
 from motionbits.setdown import SetDown
 from motionbits.temporal import TemporalState
@@ -55,9 +54,12 @@ REFERENCE_SIDE = 640
 #: a MotionBit is shown only if its mask covers this many grid cells (about 120 px at 640x480)
 MIN_SHOWN_CELLS = 4
 
-#: Stage names of the per-frame timing report, in pipeline order.
-STAGES = ("resize", "flow", "twists", "graph", "propagation", "clustering", "masks", "merging",
-          "bookkeeping")
+#: Stage names of the per-frame timing report, in pipeline order. "flow" is the flow
+#: backend alone (both directions, validated); "carry" is the work on the two flows before
+#: the twists: forward-backward error, grey frames, the previous frame pulled back, image
+#: gradients, where a carried label still holds, and the labels and their history carried.
+STAGES = ("resize", "flow", "carry", "twists", "graph", "propagation", "clustering", "masks",
+          "merging", "bookkeeping")
 
 #: px: forward-backward errors are capped here (a pixel whose backward target leaves the
 #: image has an infinite or NaN error: no reliable flow).
@@ -120,6 +122,7 @@ class MotionBitsSegmenter:
         self._grid: NodeGrid | None = None
         self._seeds: np.ndarray | None = None
         self._prev: np.ndarray | None = None
+        self._prev_gray: np.ndarray | None = None  # (h, w) float32 grey of ``_prev``
         self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
         # label history and largest earlier edge weights (whole video or config.window)
         self._temporal: TemporalState | None = None
@@ -223,18 +226,20 @@ class MotionBitsSegmenter:
         with self._stage("resize"):
             cur = self._to_work(frame)
         if self._prev is None:
-            self._prev = cur
+            self._prev, self._prev_gray = cur, _gray(cur)
             return self._empty_result()
         cfg, grid = self.config, self._grid
         with self._stage("flow"):
             flow_fwd = check_flow(self.flow(self._prev, cur), cur.shape[:2], self.flow)
             flow_back = check_flow(self.flow(cur, self._prev), cur.shape[:2], self.flow)
+
+        with self._stage("carry"):
             # pixels whose backward target leaves the image come back inf or nan (remap
-            # interpolates the inf border): treat both as "no reliable flow"
-            fb_err = np.nan_to_num(forward_backward_error(flow_back, flow_fwd),
-                                   nan=FB_ERROR_CAP, posinf=FB_ERROR_CAP)
+            # interpolates the inf border): treat both as "no reliable flow" (fmin: the cap)
+            fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd),
+                             np.float32(FB_ERROR_CAP))
             # last frame's labels and label history, carried to this frame
-            cur_g, prev_g = _gray(cur), _gray(self._prev)
+            cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
             if self._first is None:
                 self._first = Origin(raw_prev_g, np.eye(3), np.eye(3))
@@ -256,7 +261,7 @@ class MotionBitsSegmenter:
             hist_nodes = history[ix[:, 1], ix[:, 0]]
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             seen_pts = pts + sample_bilinear(flow_back, pts)  # where the nodes came from
-            node_err = sample_bilinear(np.minimum(fb_err, FB_ERROR_CAP)[..., None], pts)[:, 0]
+            node_err = sample_bilinear(fb_err[..., None], pts)[:, 0]
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow
@@ -273,13 +278,13 @@ class MotionBitsSegmenter:
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
             raw = twist_edge_weights(motions.twist, grid.neighbors, cov)
             source = grid.nearest_node(seen_pts)
-            past = self._temporal.project(lambda pm: project_past_max(pm, grid.neighbors, source))
+            past = self._temporal.project(lambda pm: project_past_max(pm, grid, source))
             weights = apply_temporal_constraints(raw, grid.neighbors, hist_nodes, past)
             # eq. 4: a node belongs to the moving set if it moves now or was part of a
             # MotionBit at the last frame; enclosed holes (e.g. near a centre of rotation,
             # where points barely move but share the body's twist) are filled.
             active = (motions.displacement > cfg.move_threshold) | (prior_nodes != 0)
-            active = ndimage.binary_fill_holes(active.reshape(grid.rows, grid.cols)).ravel()
+            active = binary_fill_holes(active.reshape(grid.rows, grid.cols)).ravel()
             w = symmetric_graph(weights, grid.neighbors, keep=active)
             active_idx = np.flatnonzero(active)
 
@@ -343,14 +348,14 @@ class MotionBitsSegmenter:
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
-            rep = self._groups.representatives(np.unique(labels[labels > 0]))
+            area = np.bincount(labels.ravel())
+            rep = self._groups.representatives(np.flatnonzero(area[1:]) + 1)  # ids present
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown; a piece set down, once it still stands at the
             # next frame
             shown = {r for i, r in rep.items()
                      if i not in self._tentative and i not in self._setdown.pending}
             # ... and covers at least MIN_SHOWN_CELLS grid cells (smaller ones are flow noise)
-            area = np.bincount(labels.ravel())
             group_area: dict[int, int] = {}
             for i, r in rep.items():
                 group_area[r] = group_area.get(r, 0) + int(area[i])
@@ -363,11 +368,12 @@ class MotionBitsSegmenter:
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
-            self._prev = cur
+            self._prev, self._prev_gray = cur, cur_g
             # the twists reported: each moving MotionBit's motion refined on its own pixels
-            # (flow reads rotations low)
+            # (flow reads rotations low) -- those a shown MotionBit reports
+            reported = set(twist_sources(node_ids, ids, rep).values())
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
-                                                  moving)
+                                                  moving & reported)
             # the masks shown are trimmed to the image's edges; the state keeps the
             # motion's masks (trimming them would compound from frame to frame)
             labels = snap_to_edges(labels, cur, int(round(cfg.edge_band * max(grid.cell))))

@@ -101,8 +101,8 @@ class TemporalState:
         restart start again from this frame alone.
         """
         self.past_max = np.maximum(self.past_max, raw)
-        self.histories = np.stack([refine_history(h, labels, margin=margin)
-                                   for h in self.histories])
+        refined = [refine_history(h, labels, margin=margin) for h in self.histories]
+        self.histories = refined[0][None] if len(refined) == 1 else np.stack(refined)
         self.folded += 1
         self.covered += 1
         if self.window is None:

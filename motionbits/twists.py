@@ -18,6 +18,8 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.nodes import binary_fill_holes
+
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
            "rigid_matrix", "nodes_to_fit", "refine_rigid_motion", "refine_moving_motions"]
 
@@ -30,6 +32,10 @@ FIT_GROWTH = 5
 #: Side (px) of the square by which a MotionBit's mask is eroded before its motion is
 #: refined on the images: boundary pixels mix two motions.
 REFINE_ERODE = 5
+#: ECC iteration cap of the refinement, and the px of context around a MotionBit's box
+#: (its motion must stay inside it).
+REFINE_ITERATIONS = 10
+REFINE_MARGIN = 16
 
 
 @dataclass(frozen=True)
@@ -52,9 +58,15 @@ class LocalMotions:
     inliers: np.ndarray
 
 
-def _rot(theta: np.ndarray) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+def _sum_last(a: np.ndarray) -> np.ndarray:
+    """``a.sum(-1)`` over a short last axis (a neighbourhood's points), as numpy sums fewer
+    than 8 numbers -- in order -- but without its per-row overhead."""
+    if a.shape[-1] >= 8 or a.shape[-1] < 2:
+        return a.sum(-1)
+    out = a[..., 0] + a[..., 1]
+    for j in range(2, a.shape[-1]):
+        out += a[..., j]
+    return out
 
 
 def kabsch_2d(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -68,16 +80,29 @@ def kabsch_2d(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, 
     Returns:
         theta (...,) and t (..., 2).
     """
-    ws = w.sum(-1, keepdims=True)
+    ws = w.sum(-1)
     ws_safe = np.where(ws > 0, ws, 1.0)
-    pm = (w[..., None] * p).sum(-2) / ws_safe
-    qm = (w[..., None] * q).sum(-2) / ws_safe
-    pc = p - pm[..., None, :]
-    qc = q - qm[..., None, :]
-    cross = (w * (pc[..., 0] * qc[..., 1] - pc[..., 1] * qc[..., 0])).sum(-1)
-    dot = (w * (pc[..., 0] * qc[..., 0] + pc[..., 1] * qc[..., 1])).sum(-1)
+    px, py, qx, qy = p[..., 0], p[..., 1], q[..., 0], q[..., 1]
+    if p.shape[-2] < 8:  # a few points each (neighbourhoods): summed in order, per coordinate
+
+        def mean(v: np.ndarray) -> np.ndarray:
+            total = w[..., 0] * v[..., 0]
+            for j in range(1, v.shape[-1]):
+                total += w[..., j] * v[..., j]
+            return total / ws_safe
+
+        pmx, pmy, qmx, qmy = mean(px), mean(py), mean(qx), mean(qy)
+    else:
+        pm = (w[..., None] * p).sum(-2) / ws_safe[..., None]
+        qm = (w[..., None] * q).sum(-2) / ws_safe[..., None]
+        pmx, pmy, qmx, qmy = pm[..., 0], pm[..., 1], qm[..., 0], qm[..., 1]
+    pcx, pcy = px - pmx[..., None], py - pmy[..., None]
+    qcx, qcy = qx - qmx[..., None], qy - qmy[..., None]
+    cross = _sum_last(w * (pcx * qcy - pcy * qcx))
+    dot = _sum_last(w * (pcx * qcx + pcy * qcy))
     theta = np.arctan2(cross, dot)
-    t = qm - (_rot(theta) @ pm[..., None])[..., 0]
+    c, s = np.cos(theta), np.sin(theta)
+    t = np.stack([qmx - (c * pmx - s * pmy), qmy - (s * pmx + c * pmy)], -1)
     return theta, t
 
 
@@ -150,9 +175,9 @@ def fit_local_motions(
         inliers_all = np.ones((n, idx.shape[1]), bool)
         angle_all[fit], trans_all[fit], inliers_all[fit] = angle, trans, inliers
         angle, trans, inliers = angle_all, trans_all, inliers_all
-    own = points.astype(np.float64)
-    moved_to = (_rot(angle) @ own[..., None])[..., 0] + trans
-    displacement = np.linalg.norm(moved_to - own, axis=1)
+    x, y = points[:, 0].astype(np.float64), points[:, 1].astype(np.float64)
+    c, s = np.cos(angle), np.sin(angle)
+    displacement = np.hypot(c * x - s * y + trans[:, 0] - x, s * x + c * y + trans[:, 1] - y)
     twist = -se2_log(angle, trans)  # log(T^-1) = -log(T): forward motion
     return LocalMotions(twist=twist, angle=angle, trans=trans, displacement=displacement,
                         inliers=inliers)
@@ -180,12 +205,24 @@ def _fit_neighbourhoods(points, back_points, idx, weights, inlier_threshold, dty
     tx = 0.5 * (qx[:, a] + qx[:, b]) - (c[..., 0] * mpx - s[..., 0] * mpy)
     ty = 0.5 * (qy[:, a] + qy[:, b]) - (s[..., 0] * mpx + c[..., 0] * mpy)
     pxe, pye = px[:, None, :], py[:, None, :]  # (n, 1, m)
-    rx = c * pxe - s * pye + tx[..., None] - qx[:, None, :]  # (n, P, m)
-    ry = s * pxe + c * pye + ty[..., None] - qy[:, None, :]
-    r2 = rx * rx + ry * ry
+    # residuals rx = c px - s py + tx - qx, ry = s px + c py + ty - qy, (n, P, m), computed
+    # in place (the same operations in the same order: fewer large temporaries)
+    rx, tmp = c * pxe, s * pye
+    rx -= tmp
+    rx += tx[..., None]
+    rx -= qx[:, None, :]
+    ry = s * pxe
+    np.multiply(c, pye, out=tmp)
+    ry += tmp
+    ry += ty[..., None]
+    ry -= qy[:, None, :]
+    r2 = rx * rx
+    r2 += np.multiply(ry, ry, out=ry)
     tau2 = inlier_threshold**2
     # MSAC cost: inliers pay their squared residual, outliers a constant
-    cost = (w[:, None, :] * np.minimum(r2, tau2)).sum(-1) + 1e-9 * np.arange(len(pairs))
+    capped = np.minimum(r2, tau2, out=rx)
+    capped *= w[:, None, :]
+    cost = _sum_last(capped) + 1e-9 * np.arange(len(pairs))
     best = np.argmin(cost, axis=1)
     inliers = r2[np.arange(n), best] < tau2  # (n, m)
     fit_w = weights.astype(np.float64)[idx] * inliers
@@ -221,13 +258,14 @@ def nodes_to_fit(node_flow: np.ndarray, prior_nodes: np.ndarray, shape: tuple[in
     """
     seed = (np.hypot(node_flow[:, 0], node_flow[:, 1]) > FIT_SEED_FRACTION * move_threshold) | (
         prior_nodes != 0)
-    grown = ndimage.binary_dilation(seed.reshape(shape), np.ones((FIT_GROWTH, FIT_GROWTH), bool))
-    return np.flatnonzero(ndimage.binary_fill_holes(grown))
+    grown = cv2.dilate(seed.reshape(shape).astype(np.uint8), np.ones((FIT_GROWTH, FIT_GROWTH),
+                                                                    np.uint8))
+    return np.flatnonzero(binary_fill_holes(grown > 0))
 
 
 def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.ndarray,
-                        theta: float, t: np.ndarray, *, iterations: int = 10,
-                        margin: int = 16) -> tuple[float, np.ndarray]:
+                        theta: float, t: np.ndarray, *, iterations: int = REFINE_ITERATIONS,
+                        margin: int = REFINE_MARGIN) -> tuple[float, np.ndarray]:
     """Refine a rigid backward motion q = R(theta) p + t of the pixels ``mask`` on the images
     themselves (OpenCV's ECC alignment, Euclidean model, started from the given motion).
 
@@ -245,12 +283,24 @@ def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.nd
     Returns:
         theta, t (2,) of the refined backward motion.
     """
-    ys, xs = np.nonzero(mask)
-    if len(xs) < 16:
+    box = ndimage.find_objects(mask.astype(np.uint8))
+    if not box:
         return theta, np.asarray(t, np.float64)
-    h, w = mask.shape
-    y0, y1 = max(ys.min() - margin, 0), min(ys.max() + margin + 1, h)
-    x0, x1 = max(xs.min() - margin, 0), min(xs.max() + margin + 1, w)
+    return _refine_in_box(cur_gray, prev_gray, mask, 1, box[0], theta, t,
+                          iterations=iterations, margin=margin)
+
+
+def _refine_in_box(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: np.ndarray, lab: int,
+                   box: tuple[slice, slice], theta: float, t: np.ndarray, *, iterations: int,
+                   margin: int) -> tuple[float, np.ndarray]:
+    """:func:`refine_rigid_motion` of the pixels ``labels == lab``, all inside ``box`` (their
+    bounding box); only the box grown by ``margin`` is read."""
+    h, w = labels.shape
+    y0, y1 = max(box[0].start - margin, 0), min(box[0].stop + margin, h)
+    x0, x1 = max(box[1].start - margin, 0), min(box[1].stop + margin, w)
+    mask = labels[y0:y1, x0:x1] == lab
+    if np.count_nonzero(mask) < 16:
+        return theta, np.asarray(t, np.float64)
     c, s = np.cos(theta), np.sin(theta)
     # the same motion in crop coordinates: q' = R (p' + o) + t - o
     off = np.array([x0, y0], np.float64)
@@ -260,7 +310,7 @@ def refine_rigid_motion(cur_gray: np.ndarray, prev_gray: np.ndarray, mask: np.nd
         _, warp = cv2.findTransformECC(
             cur_gray[y0:y1, x0:x1], prev_gray[y0:y1, x0:x1], warp, cv2.MOTION_EUCLIDEAN,
             (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, iterations, 1e-5),
-            mask[y0:y1, x0:x1].astype(np.uint8), 1)
+            mask.astype(np.uint8), 1)
     except cv2.error:
         return theta, np.asarray(t, np.float64)
     th = float(np.arctan2(warp[1, 0], warp[0, 0]))
@@ -285,9 +335,17 @@ def refine_moving_motions(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: n
         thetas (K,) float64 and trans (K, 2) float64, new arrays.
     """
     thetas, trans = thetas.copy(), trans.copy()
-    inner = cv2.erode(labels.astype(np.float32), np.ones((REFINE_ERODE, REFINE_ERODE), np.uint8))
-    for k, lab in enumerate(ids):
-        if lab in moving:
-            thetas[k], trans[k] = refine_rigid_motion(cur_gray, prev_gray, inner == lab,
-                                                      thetas[k], trans[k])
+    todo = [k for k, lab in enumerate(ids) if lab in moving]
+    if not todo:
+        return thetas, trans
+    small = labels.max() < 1 << 16  # uint16 morphology (faster) where the ids fit
+    inner = cv2.erode(labels.astype(np.uint16 if small else np.float32),
+                      np.ones((REFINE_ERODE, REFINE_ERODE), np.uint8)).astype(np.int32)
+    boxes = ndimage.find_objects(inner, max_label=max(int(ids[k]) for k in todo))
+    for k in todo:
+        box = boxes[int(ids[k]) - 1]
+        if box is not None:
+            thetas[k], trans[k] = _refine_in_box(cur_gray, prev_gray, inner, int(ids[k]), box,
+                                                 thetas[k], trans[k], iterations=REFINE_ITERATIONS,
+                                                 margin=REFINE_MARGIN)
     return thetas, trans

@@ -32,12 +32,12 @@ def test_nodes_to_fit_grows_two_rings_and_keeps_prior_nodes():
 def test_project_past_max_follows_the_nodes():
     grid = NodeGrid.build(60, 60, 6, 4)
     past = np.random.default_rng(0).uniform(size=grid.neighbors.shape)
-    still = project_past_max(past, grid.neighbors, np.arange(grid.n))
+    still = project_past_max(past, grid, np.arange(grid.n))
     np.testing.assert_array_equal(still, past)
     # every node came from the node one column to its left: an interior node reads the
     # weights of that node's edges (its neighbour lists are the same, shifted)
     src = np.arange(grid.n) - 1
-    shifted = project_past_max(past, grid.neighbors, src)
+    shifted = project_past_max(past, grid, src)
     i = 2 * grid.cols + 3
     order_i = np.argsort(grid.neighbors[i] - i)
     order_s = np.argsort(grid.neighbors[i - 1] - (i - 1))
@@ -155,6 +155,6 @@ def test_project_past_max_projects_stacked_graphs_alike():
     grid = NodeGrid.build(60, 60, 6, 4)
     past = np.random.default_rng(2).uniform(size=(3, *grid.neighbors.shape))
     src = np.roll(np.arange(grid.n), 7)
-    stacked = project_past_max(past, grid.neighbors, src)
+    stacked = project_past_max(past, grid, src)
     for g in range(3):
-        np.testing.assert_array_equal(stacked[g], project_past_max(past[g], grid.neighbors, src))
+        np.testing.assert_array_equal(stacked[g], project_past_max(past[g], grid, src))

@@ -112,6 +112,8 @@ def _print_stages(t: ClipTiming) -> None:
         print(f"{s:<14}{t.stages[s]:>12.1f}")
     print(f"{'per frame':<14}{t.per_frame:>12.1f}   ({1000 / t.per_frame:.2f} frames/s; "
           f"max {max(t.walls):.0f} ms)")
+    if t.stages["flow"] > 0:
+        print(f"{'per frame / flow':<17}{t.per_frame / t.stages['flow']:>9.2f}x")
 
 
 def _scaling(rows: list[tuple[str, MotionBitsConfig, tuple[int, int]]], frames: int,

@@ -1,0 +1,99 @@
+"""The speed-ups of the per-frame steps give the same numbers as the plain computations
+they replace (whole image, scipy, a search over the neighbour lists)."""
+
+import cv2
+import numpy as np
+from scipy import ndimage
+
+from motionbits.graph import project_past_max
+from motionbits.identity import refine_history
+from motionbits.merging import touching_pairs
+from motionbits.nodes import NodeGrid, binary_fill_holes
+from motionbits.records import twist_sources
+
+
+def _blobs(rng, shape=(90, 120), n=4):
+    labels = np.zeros(shape, np.int32)
+    for k in range(n):
+        y, x = rng.integers(0, shape[0]), rng.integers(0, shape[1])
+        labels[y:y + rng.integers(2, 30), x:x + rng.integers(2, 30)] = k + 1
+    return labels
+
+
+def test_binary_fill_holes_is_scipys():
+    rng = np.random.default_rng(0)
+    for density in (0.05, 0.3, 0.6):
+        for _ in range(10):
+            mask = ndimage.binary_dilation(rng.random((40, 50)) < density / 4, np.ones((3, 3)))
+            np.testing.assert_array_equal(binary_fill_holes(mask),
+                                          ndimage.binary_fill_holes(mask))
+    ring = np.zeros((7, 7), bool)
+    ring[1:6, 1:6] = True
+    ring[3, 3] = False
+    assert binary_fill_holes(ring)[3, 3] and not binary_fill_holes(np.zeros((3, 3), bool)).any()
+
+
+def test_edge_slot_finds_each_neighbour_and_nothing_else():
+    grid = NodeGrid.build(48, 64, 9, 6)
+    rng = np.random.default_rng(1)
+    src = rng.integers(0, grid.n, 400)
+    dst = np.where(rng.random(400) < 0.5, grid.neighbors[src, rng.integers(0, 6, 400)],
+                   rng.integers(0, grid.n, 400))
+    slot = grid.edge_slot(src, dst)
+    for s, d, t in zip(src, dst, slot):
+        where = np.flatnonzero(grid.neighbors[s] == d)
+        assert t == (where[0] if len(where) else -1)
+
+
+def test_project_past_max_equals_the_search_over_neighbour_lists():
+    grid = NodeGrid.build(60, 80, 10, 6)
+    rng = np.random.default_rng(2)
+    past = rng.uniform(size=(2, *grid.neighbors.shape))
+    source = np.clip(np.arange(grid.n) + rng.integers(-12, 13, grid.n), 0, grid.n - 1)
+    # the definition: the weight of the edge between the two source nodes, 0 if none
+    hit = grid.neighbors[source][:, None, :] == source[grid.neighbors][:, :, None]
+    expected = np.where(hit, past[:, source, None, :], 0.0).max(axis=-1)
+    np.testing.assert_array_equal(project_past_max(past, grid, source), expected)
+
+
+def _refine_history_whole_image(history, labels, margin):
+    key = history.astype(np.int64) * (int(labels.max()) + 1) + labels.astype(np.int64)
+    lab = labels.astype(np.float32)
+    box = np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)
+    interior = cv2.dilate(lab, box) == cv2.erode(lab, box)
+    if interior.any() and not interior.all():
+        _, nearest = cv2.distanceTransformWithLabels(
+            np.where(interior, 0, 1).astype(np.uint8), cv2.DIST_L2, 3,
+            labelType=cv2.DIST_LABEL_PIXEL)
+        key = key.ravel()[np.flatnonzero(interior.ravel())[nearest.ravel() - 1]]
+    _, inv = np.unique(key.ravel(), return_inverse=True)
+    return inv.reshape(labels.shape)
+
+
+def test_refine_history_on_the_labelled_box_equals_the_whole_image():
+    rng = np.random.default_rng(3)
+    for trial in range(30):
+        labels = _blobs(rng, n=int(rng.integers(1, 5)))
+        history = rng.integers(0, 3, labels.shape).astype(np.int32)
+        margin = int(rng.integers(1, 6))
+        got = refine_history(history, labels, margin)
+        want = _refine_history_whole_image(history, labels, margin)
+        # the same partition (class numbers are a compact renumbering of the same keys)
+        pairs = np.unique(np.stack([got.ravel(), want.ravel()]), axis=1)
+        assert pairs.shape[1] == len(np.unique(got)) == len(np.unique(want))
+
+
+def test_touching_pairs_on_the_labelled_box():
+    labels = np.zeros((60, 80), np.int32)
+    labels[10:20, 10:20], labels[10:20, 22:30], labels[40:50, 60:70] = 1, 2, 3
+    assert touching_pairs(labels, reach=3) == {(1, 2)}  # columns 19 and 22
+    assert touching_pairs(labels, reach=2) == set()
+    assert touching_pairs(np.zeros((5, 5), np.int32), reach=1) == set()
+
+
+def test_twist_sources_are_the_largest_members_with_motion():
+    node_ids = np.array([0, 1, 1, 2, 2, 2, 3, 4, 4, 4, 4, 5])
+    rep = {1: 1, 2: 1, 3: 3, 4: 0, 5: 5}  # 2 joins 1; 4 is not shown
+    # 2 has the most nodes of group 1; 5 has no motion this frame (no cluster)
+    assert twist_sources(node_ids, np.array([1, 2, 3, 4]), rep) == {1: 2, 3: 3}
+    assert twist_sources(node_ids, np.array([1, 3]), rep) == {1: 1, 3: 3}
