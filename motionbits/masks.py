@@ -14,7 +14,7 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.evidence import photometric_residual
-from motionbits.nodes import NodeGrid
+from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "snap_to_edges",
@@ -155,26 +155,24 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         if support is None:
             continue
         rows, cols, inside = support
-        photo = photometric_residual(cur_gray, prev_gray, rigid_matrix(th, t), (rows, cols),
-                                     window)[inside]
-        ys, xs = np.nonzero(inside)
-        ys += rows.start
-        xs += cols.start
+        box = rows, cols
+        photo = photometric_residual(cur_gray, prev_gray, rigid_matrix(th, t), box, window)
+        # the whole box at once (cheaper than gathering its ``inside`` pixels)
+        px = np.arange(cols.start, cols.stop, dtype=np.float32)[None, :]
+        py = np.arange(rows.start, rows.stop, dtype=np.float32)[:, None]
         c, s = np.cos(th), np.sin(th)
-        px = xs.astype(np.float32)
-        py = ys.astype(np.float32)
         mx = c * px - s * py + t[0] - px  # the model's backward displacement
         my = s * px + c * py + t[1] - py
-        resid = np.hypot(mx - flow_back[ys, xs, 0], my - flow_back[ys, xs, 1])
+        resid = np.hypot(mx - flow_back[rows, cols, 0], my - flow_back[rows, cols, 1])
         still = np.hypot(mx, my) < ambiguous
-        own = ((prior[ys, xs] == lab) & prior_valid[ys, xs]) | (still & (node_map[ys, xs] == lab))
-        cost = texture[ys, xs] * resid + photo_weight * photo - bonus * own
-        better = cost < best[ys, xs]
-        by, bx = ys[better], xs[better]
-        best[by, bx] = cost[better]
-        out[by, bx] = lab
-        gain = static_photo[by, bx] - photo[better]
-        shown[by, bx] = (gain > evidence) | (earned[by, bx] & (prior[by, bx] == lab))
+        mine = prior[box] == lab
+        own = (mine & prior_valid[box]) | (still & (node_map[box] == lab))
+        cost = texture[box] * resid + photo_weight * photo - bonus * own
+        better = inside & (cost < best[box])
+        best[box][better] = cost[better]
+        out[box][better] = lab
+        gain = static_photo[box] - photo
+        shown[box][better] = ((gain > evidence) | (earned[box] & mine))[better]
     out = fill_holes(out)
     return out, shown & (out > 0)
 
@@ -186,7 +184,7 @@ def fill_holes(label_map: np.ndarray) -> np.ndarray:
         if box is None:
             continue
         sub = out[box]
-        hole = ndimage.binary_fill_holes(label_map[box] == i + 1) & (sub == 0)
+        hole = binary_fill_holes(label_map[box] == i + 1) & (sub == 0)
         sub[hole] = i + 1
     return out
 
@@ -234,19 +232,28 @@ def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarr
     """
     if band < 1 or not label_map.any():
         return label_map
-    markers = np.zeros(label_map.shape, np.int32)
-    near = cv2.dilate((label_map > 0).astype(np.uint8), cv2.getStructuringElement(
+    # everything happens on the box of the masks grown by the band (+1 px of background)
+    ys, xs = np.nonzero(label_map.any(axis=1))[0], np.nonzero(label_map.any(axis=0))[0]
+    h, w = label_map.shape
+    box = (slice(max(ys[0] - band - 1, 0), min(ys[-1] + band + 2, h)),
+           slice(max(xs[0] - band - 1, 0), min(xs[-1] + band + 2, w)))
+    sub = label_map[box]
+    markers = np.zeros(sub.shape, np.int32)
+    near = cv2.dilate((sub > 0).astype(np.uint8), cv2.getStructuringElement(
         cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1)))
     markers[near == 0] = 1
-    for i, box in enumerate(ndimage.find_objects(label_map)):
-        if box is None:
+    ridge_kernel = np.ones((3, 3), np.uint8)
+    for i, lbox in enumerate(ndimage.find_objects(sub)):
+        if lbox is None:
             continue
-        rows = slice(max(box[0].start - 1, 0), box[0].stop + 1)
-        cols = slice(max(box[1].start - 1, 0), box[1].stop + 1)
-        mask = (label_map[rows, cols] == i + 1).astype(np.uint8)
+        rows = slice(max(lbox[0].start - 1, 0), lbox[0].stop + 1)
+        cols = slice(max(lbox[1].start - 1, 0), lbox[1].stop + 1)
+        mask = (sub[rows, cols] == i + 1).astype(np.uint8)
         dist = cv2.distanceTransform(mask, cv2.DIST_L2, 3)
-        core = (dist > band) | ((dist > 0) & (dist >= ndimage.maximum_filter(dist, 3)))
+        core = (dist > band) | ((dist > 0) & (dist >= cv2.dilate(dist, ridge_kernel)))
         markers[rows, cols][core] = i + 2
-    flooded = cv2.watershed(np.ascontiguousarray(rgb), markers)
+    flooded = cv2.watershed(np.ascontiguousarray(rgb[box]), markers)
+    out = np.zeros_like(label_map)
     # a watershed line (-1) lies on the edge between two basins: background
-    return np.where(flooded - 1 == label_map, label_map, 0).astype(np.int32)
+    out[box] = np.where(flooded - 1 == sub, sub, 0)
+    return out
