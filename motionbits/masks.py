@@ -218,9 +218,9 @@ def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarr
     table along a moving arm). A pixel more than ``band`` px inside a mask (or on its
     medial axis, so thin parts keep a marker) keeps its label, a pixel more than ``band``
     px from every mask is background, and the band between is flooded from both by image
-    gradient. Only pixels that the flood gives to the background (or to another label)
-    are taken from a mask: nothing is added, so a texture edge outside a mask cannot
-    grow it.
+    gradient. Only pixels that the flood gives to the background are taken from a mask:
+    nothing is added (a texture edge outside a mask cannot grow it), and where two masks
+    meet, the motion keeps deciding.
 
     Args:
         label_map: (H, W) int32 labels (0 = background).
@@ -253,7 +253,11 @@ def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarr
         core = (dist > band) | ((dist > 0) & (dist >= cv2.dilate(dist, ridge_kernel)))
         markers[rows, cols][core] = i + 2
     flooded = cv2.watershed(np.ascontiguousarray(rgb[box]), markers)
-    out = np.zeros_like(label_map)
-    # a watershed line (-1) lies on the edge between two basins: background
-    out[box] = np.where(flooded - 1 == sub, sub, 0)
+    # a pixel leaves its mask only for the background's basin (between two masks the
+    # motion decides), or as a watershed line (-1) on the background's edge
+    to_background = flooded == 1
+    to_background |= (flooded < 0) & (cv2.dilate(to_background.astype(np.uint8),
+                                                  ridge_kernel) > 0)
+    out = label_map.copy()
+    out[box][to_background] = 0
     return out

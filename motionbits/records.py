@@ -13,7 +13,7 @@ from motionbits.objects import Instance, encode_rle
 from motionbits.twists import se2_log
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionSpans", "moving_ids", "twist_sources",
-           "build_result"]
+           "group_map", "build_result"]
 
 #: One MotionBit in one frame: the shared :class:`motionbits.Instance` with ``twist``,
 #: ``moving``, ``first_moved`` and ``last_moved`` set (coordinates in input pixels; the
@@ -117,6 +117,19 @@ def twist_sources(node_ids: np.ndarray, ids: np.ndarray, rep: dict[int, int]) ->
     return {r: max(group, key=lambda i: counts[i]) for r, group in members.items()}
 
 
+def _group_lut(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
+    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1, dtype=np.int32)
+    for i, r in rep.items():
+        lut[i] = r
+    return lut
+
+
+def group_map(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
+    """(H, W) int32 label map as shown: each id replaced by the id it is shown under
+    (``rep``; 0 = not shown)."""
+    return _group_lut(labels, rep)[labels]
+
+
 def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids: np.ndarray,
                  thetas: np.ndarray, trans: np.ndarray, moving: set[int], rep: dict[int, int],
                  spans: MotionSpans, grid: NodeGrid, input_size: tuple[int, int]
@@ -140,9 +153,7 @@ def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids
     """
     h, w = input_size
     scale = w / grid.width, h / grid.height
-    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1, dtype=np.int32)
-    for i, r in rep.items():
-        lut[i] = r
+    lut = _group_lut(labels, rep)
     out = lut[labels]
     node_out = lut[np.minimum(node_ids, len(lut) - 1)] * (node_ids < len(lut))
     members: dict[int, list[int]] = {}

@@ -36,7 +36,7 @@ from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
-    MotionBit, MotionBitsResult, MotionSpans, build_result, moving_ids, twist_sources)
+    MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
 from motionbits.retirement import Origin, retire
 from motionbits.setdown import SetDown
 from motionbits.temporal import TemporalState
@@ -374,9 +374,11 @@ class MotionBitsSegmenter:
             reported = set(twist_sources(node_ids, ids, rep).values())
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
                                                   moving & reported)
-            # the masks shown are trimmed to the image's edges; the state keeps the
-            # motion's masks (trimming them would compound from frame to frame)
-            labels = snap_to_edges(labels, cur, int(round(cfg.edge_band * max(grid.cell))))
+            # the masks shown (one per group) are trimmed to the image's edges; the state
+            # keeps the motion's masks (trimming them would compound from frame to frame)
+            shown_map = group_map(labels, rep)
+            trimmed = snap_to_edges(shown_map, cur, int(round(cfg.edge_band * max(grid.cell))))
+            labels = np.where((shown_map > 0) & (trimmed == 0), 0, labels)
             result = build_result(self.frame_index, labels, node_ids, ids, thetas, trans,
                                   moving, rep, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
