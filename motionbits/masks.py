@@ -86,10 +86,10 @@ def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
                   trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
-                  prev_gray: np.ndarray, still: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
-                  texture: np.ndarray, earned: np.ndarray, *, bonus: float, photo_weight: float,
-                  evidence: float, kept: np.ndarray, ambiguous: float
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  prev_gray: np.ndarray, still: np.ndarray, prior: np.ndarray,
+                  prior_valid: np.ndarray, texture: np.ndarray, earned: np.ndarray, *,
+                  bonus: float, photo_weight: float, evidence: float, kept: np.ndarray,
+                  ambiguous: float) -> tuple[np.ndarray, np.ndarray]:
     """Label every pixel by the motion that best explains it.
 
     The cost of a motion at a pixel is its flow residual (px), weighted by how much texture
@@ -164,9 +164,9 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         mx = c * px - s * py + t[0] - px  # the model's backward displacement
         my = s * px + c * py + t[1] - py
         resid = np.hypot(mx - flow_back[rows, cols, 0], my - flow_back[rows, cols, 1])
-        still = np.hypot(mx, my) < ambiguous
+        barely = np.hypot(mx, my) < ambiguous
         mine = prior[box] == lab
-        own = (mine & prior_valid[box]) | (still & (node_map[box] == lab))
+        own = (mine & prior_valid[box]) | (barely & (node_map[box] == lab))
         cost = texture[box] * resid + photo_weight * photo - bonus * own
         better = inside & (cost < best[box])
         best[box][better] = cost[better]
@@ -206,7 +206,6 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
         if len(small):
             out[box][np.isin(comp, small)] = 0
     return out
-
 
 
 def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:

@@ -117,33 +117,30 @@ def twist_sources(node_ids: np.ndarray, ids: np.ndarray, rep: dict[int, int]) ->
     return {r: max(group, key=lambda i: counts[i]) for r, group in members.items()}
 
 
-def _group_lut(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
-    lut = np.arange(max([int(labels.max()), *rep.keys(), 0]) + 1, dtype=np.int32)
+def group_map(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
+    """int32 label map (any shape) as shown: each id replaced by the id it is shown under
+    (``rep``; 0 = not shown, and for ids not in ``rep``)."""
+    lut = np.zeros(max([int(labels.max(initial=0)), *rep.keys(), 0]) + 1, np.int32)
     for i, r in rep.items():
         lut[i] = r
-    return lut
+    return lut[labels]
 
 
-def group_map(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
-    """(H, W) int32 label map as shown: each id replaced by the id it is shown under
-    (``rep``; 0 = not shown)."""
-    return _group_lut(labels, rep)[labels]
-
-
-def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids: np.ndarray,
+def build_result(frame_index: int, shown: np.ndarray, node_ids: np.ndarray, ids: np.ndarray,
                  thetas: np.ndarray, trans: np.ndarray, moving: set[int], rep: dict[int, int],
-                 spans: MotionSpans, grid: NodeGrid, input_size: tuple[int, int]
-                 ) -> MotionBitsResult:
+                 source: dict[int, int], spans: MotionSpans, grid: NodeGrid,
+                 input_size: tuple[int, int]) -> MotionBitsResult:
     """The records of the MotionBits shown: each group of merged ids under its
     representative, with the twist of its largest member that has a motion this frame.
 
     Args:
         frame_index: index of the frame.
-        labels: (h, w) int32 working-resolution label map.
+        shown: (h, w) int32 working-resolution label map as shown (:func:`group_map`).
         node_ids: (n,) int MotionBit id of each grid node (0 = none).
         ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,), ``trans`` (K, 2).
         moving: ids that moved this frame.
-        rep: id -> the id it is shown under (0 = not shown), for the ids in ``labels``.
+        rep: id -> the id it is shown under (0 = not shown), for the ids present.
+        source: shown id -> the member whose twist it reports (:func:`twist_sources`).
         spans: first / last frame of motion of each id.
         grid: the node grid (its image size is the working resolution).
         input_size: (H, W) of the input frames.
@@ -153,13 +150,11 @@ def build_result(frame_index: int, labels: np.ndarray, node_ids: np.ndarray, ids
     """
     h, w = input_size
     scale = w / grid.width, h / grid.height
-    lut = _group_lut(labels, rep)
-    out = lut[labels]
-    node_out = lut[np.minimum(node_ids, len(lut) - 1)] * (node_ids < len(lut))
+    out = shown
+    node_out = group_map(node_ids, rep)
     members: dict[int, list[int]] = {}
     for i, r in rep.items():
         members.setdefault(r, []).append(i)
-    source = twist_sources(node_ids, ids, rep)
     twists = {int(i): -se2_log(th, t) for i, th, t in zip(ids, thetas, trans)}
     if (h, w) != out.shape:
         out = cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)

@@ -371,16 +371,15 @@ class MotionBitsSegmenter:
             self._prev, self._prev_gray = cur, cur_g
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low) -- those a shown MotionBit reports
-            reported = set(twist_sources(node_ids, ids, rep).values())
+            source = twist_sources(node_ids, ids, rep)
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
-                                                  moving & reported)
+                                                  moving & set(source.values()))
             # the masks shown (one per group) are trimmed to the image's edges; the state
             # keeps the motion's masks (trimming them would compound from frame to frame)
-            shown_map = group_map(labels, rep)
-            trimmed = snap_to_edges(shown_map, cur, int(round(cfg.edge_band * max(grid.cell))))
-            labels = np.where((shown_map > 0) & (trimmed == 0), 0, labels)
-            result = build_result(self.frame_index, labels, node_ids, ids, thetas, trans,
-                                  moving, rep, self._spans, grid, self._input_size)
+            shown = snap_to_edges(group_map(labels, rep), cur,
+                                  int(round(cfg.edge_band * max(grid.cell))))
+            result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
+                                  moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
         return result
 

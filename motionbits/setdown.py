@@ -34,6 +34,7 @@ import cv2
 import numpy as np
 
 from motionbits.evidence import photometric_residual
+from motionbits.merging import STILL
 from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
 from motionbits.twists import rigid_matrix
 
@@ -52,8 +53,6 @@ COMPACT_CELLS = 2
 WINDOW = 3
 #: At the next frame it is confirmed if it still holds this share of its area.
 REST_SHARE = 0.5
-#: The still (2, 3) motion.
-_STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 @dataclass
@@ -167,7 +166,7 @@ class SetDown:
                 if (opened.sum() < COMPACT_SHARE * piece.sum()
                         or earned[box][piece].mean() < EARNED_SHARE):
                     continue
-                still = photometric_residual(cur, prev, _STILL, box)[piece].mean()
+                still = photometric_residual(cur, prev, STILL, box)[piece].mean()
                 moved = photometric_residual(cur, prev, rigid_matrix(th, t), box)[piece].mean()
                 if still > self.rest or moved - still < self.evidence:
                     continue
@@ -219,4 +218,4 @@ def _mean_still(cur: np.ndarray, prev: np.ndarray, mask: np.ndarray) -> float:
         return 0.0
     ys, xs = np.nonzero(mask)
     box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
-    return float(photometric_residual(cur, prev, _STILL, box)[mask[box]].mean())
+    return float(photometric_residual(cur, prev, STILL, box)[mask[box]].mean())

@@ -9,7 +9,7 @@ from motionbits.identity import identify_clusters
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid
 from motionbits.propagation import propagate_components
-from motionbits.records import MotionSpans, build_result, moving_ids
+from motionbits.records import MotionSpans, build_result, group_map, moving_ids, twist_sources
 from motionbits.retirement import retire
 from motionbits.twists import nodes_to_fit
 
@@ -141,8 +141,9 @@ def test_moving_ids_spans_and_records():
     assert spans.first == {1: 3} and spans.last == {1: 5}
     labels = np.zeros((40, 40), np.int32)
     labels[:10], labels[10:20] = 1, 2
-    res = build_result(5, labels, node_ids, ids, thetas, trans, moving, {1: 1, 2: 1}, spans,
-                       grid, (80, 80))
+    rep = {1: 1, 2: 1}
+    res = build_result(5, group_map(labels, rep), node_ids, ids, thetas, trans, moving, rep,
+                       twist_sources(node_ids, ids, rep), spans, grid, (80, 80))
     assert res.labels.shape == (80, 80) and res.ids == [1]  # 2 merged into 1
     mb = res.motionbits[0]
     assert mb.area == 40 * 80 and mb.moving and (mb.first_moved, mb.last_moved) == (3, 5)
