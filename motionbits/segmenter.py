@@ -5,7 +5,9 @@ Each step lives in its own module; this one holds the stream's state and calls t
 
 from __future__ import annotations
 
+import os
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import contextmanager
 from functools import cache
 from typing import Iterator
@@ -68,6 +70,24 @@ FB_ERROR_CAP = 1e3
 #: Smallest side (px, odd) of the window of a new MotionBit's photometric evidence (else
 #: one grid cell).
 EVIDENCE_WINDOW = 3
+
+
+@cache
+def _worker(pid: int) -> ThreadPoolExecutor:
+    """One worker thread per process ``pid`` (a forked child gets its own), shared by the
+    process's segmenters."""
+    return ThreadPoolExecutor(max_workers=1, thread_name_prefix="motionbits")
+
+
+def _concurrently(fn, *args, **kwargs) -> Future:
+    """``fn(*args, **kwargs)`` started on the worker thread, for a call that spends its time
+    in OpenCV (which releases the GIL) while this thread goes on; run here and now where
+    OpenCV is held to one thread (batch workers hold one CPU each)."""
+    if cv2.getNumThreads() > 1:
+        return _worker(os.getpid()).submit(fn, *args, **kwargs)
+    done = Future()
+    done.set_result(fn(*args, **kwargs))
+    return done
 
 
 def _gray(frame: np.ndarray) -> np.ndarray:
@@ -267,14 +287,23 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow
-            flow_m, prev_m, back_pts, cam = compensate_camera(
-                pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
-                threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift)
-            motions = fit_local_motions(
-                pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
-                dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(
-                    back_pts - pts, prior_nodes, (grid.rows, grid.cols), cfg.move_threshold),
-                fit_fn=self._ops.fit_neighbourhoods)
+            camera = _concurrently(
+                compensate_camera, pts, seen_pts, reliability, flow_back, self._prev,
+                support=cfg.camera_support, threshold=cfg.camera_threshold,
+                min_shift=cfg.camera_min_shift)
+
+            def fit(back_pts: np.ndarray):
+                return fit_local_motions(
+                    pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
+                    dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(
+                        back_pts - pts, prior_nodes, (grid.rows, grid.cols), cfg.move_threshold),
+                    fit_fn=self._ops.fit_neighbourhoods)
+
+            # while the camera is fitted, the local motions are fitted as if it stood still
+            # (it usually does); where it moved they are fitted again against its motion
+            guess = None if camera.done() else fit(seen_pts)
+            flow_m, prev_m, back_pts, cam = camera.result()
+            motions = guess if guess is not None and back_pts is seen_pts else fit(back_pts)
 
         with self._stage("graph"):
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
@@ -366,20 +395,23 @@ class MotionBitsSegmenter:
                    for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
+            # the twists reported: each moving MotionBit's motion refined on its own pixels
+            # (flow reads rotations low) -- those a shown MotionBit reports; refined (ECC) on
+            # the worker thread while the state is folded and the masks trimmed (nothing
+            # there writes what the refinement reads)
+            source = twist_sources(node_ids, ids, rep)
+            refined = _concurrently(refine_moving_motions, cur_g, prev_g, labels, ids, thetas,
+                                    trans, moving & set(source.values()))
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g
-            # the twists reported: each moving MotionBit's motion refined on its own pixels
-            # (flow reads rotations low) -- those a shown MotionBit reports
-            source = twist_sources(node_ids, ids, rep)
-            thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
-                                                  moving & set(source.values()))
             # the masks shown (one per group) are trimmed to the image's edges; the state
             # keeps the motion's masks (trimming them would compound from frame to frame)
             shown = snap_to_edges(group_map(labels, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
+            thetas, trans = refined.result()
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
