@@ -258,9 +258,12 @@ class MotionBitsSegmenter:
             # pixels whose backward target leaves the image come back inf or nan (remap
             # interpolates the inf border): treat both as "no reliable flow" (fmin: the cap)
             back_maps = sample_maps(flow_back)  # where each pixel came from, (h, w) x and y
+            # last frame's labels and label history, carried to this frame (on the worker
+            # thread, while the images are compared here)
+            carried = _concurrently(self._temporal.carry, [self._labels, self._earned],
+                                    flow_back, back_maps)
             fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd, back_maps),
                              np.float32(FB_ERROR_CAP))
-            # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
             if self._first is None:
@@ -273,8 +276,7 @@ class MotionBitsSegmenter:
             prior_valid = (fb_err < cfg.fb_sigma) & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
-            (prior, earned), history = self._temporal.carry([self._labels, self._earned],
-                                                            flow_back, back_maps)
+            (prior, earned), history = carried.result()
             earned = earned > 0
 
         with self._stage("twists"):
