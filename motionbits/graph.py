@@ -86,14 +86,25 @@ def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.n
     """
     idx = np.concatenate([np.arange(len(twists))[:, None], neighbors], axis=1).T  # (m, n)
     m = idx.shape[0]
+    if 2 <= m < 8:  # numpy sums fewer than 8 numbers in order: row by row, along the nodes
+        idx = np.ascontiguousarray(idx)
+
+        def total(v: np.ndarray) -> np.ndarray:
+            out = v[0] + v[1]
+            for row in v[2:]:
+                out += row
+            return out
+    else:
+        def total(v: np.ndarray) -> np.ndarray:
+            return v.sum(axis=0)
     vc = []  # per component, (m, n): the twists of N* about their mean
     for i in range(3):
         v = twists[:, i][idx]
-        vc.append(v - v.sum(axis=0) / m)
+        vc.append(v - total(v) / m)
     out = noise_cov.copy()
     for i in range(3):
         for j in range(i, 3):
-            sij = (vc[i] * vc[j]).sum(axis=0) / (m - 1)
+            sij = total(vc[i] * vc[j]) / (m - 1)
             out[:, i, j] += sij
             if i != j:
                 out[:, j, i] += sij
