@@ -5,9 +5,7 @@ Each step lives in its own module; this one holds the stream's state and calls t
 
 from __future__ import annotations
 
-import os
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import contextmanager
 from functools import cache
 from typing import Iterator
@@ -70,24 +68,6 @@ FB_ERROR_CAP = 1e3
 #: Smallest side (px, odd) of the window of a new MotionBit's photometric evidence (else
 #: one grid cell).
 EVIDENCE_WINDOW = 3
-
-
-@cache
-def _worker(pid: int) -> ThreadPoolExecutor:
-    """One worker thread per process ``pid`` (a forked child gets its own), shared by the
-    process's segmenters."""
-    return ThreadPoolExecutor(max_workers=1, thread_name_prefix="motionbits")
-
-
-def _concurrently(fn, *args, **kwargs) -> Future:
-    """``fn(*args, **kwargs)`` started on the worker thread, for a call that spends its time
-    in OpenCV (which releases the GIL) while this thread goes on; run here and now where
-    OpenCV is held to one thread (batch workers hold one CPU each)."""
-    if cv2.getNumThreads() > 1:
-        return _worker(os.getpid()).submit(fn, *args, **kwargs)
-    done = Future()
-    done.set_result(fn(*args, **kwargs))
-    return done
 
 
 def _gray(frame: np.ndarray) -> np.ndarray:
@@ -259,12 +239,9 @@ class MotionBitsSegmenter:
             # pixels whose backward target leaves the image come back inf or nan (remap
             # interpolates the inf border): treat both as "no reliable flow" (fmin: the cap)
             back_maps = sample_maps(flow_back)  # where each pixel came from, (h, w) x and y
-            # last frame's labels and label history, carried to this frame (on the worker
-            # thread, while the images are compared here)
-            carried = _concurrently(self._temporal.carry, [self._labels, self._earned],
-                                    flow_back, back_maps)
             fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd, back_maps),
                              np.float32(FB_ERROR_CAP))
+            # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
             if self._first is None:
@@ -277,7 +254,8 @@ class MotionBitsSegmenter:
             prior_valid = (fb_err < cfg.fb_sigma) & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
-            (prior, earned), history = carried.result()
+            (prior, earned), history = self._temporal.carry([self._labels, self._earned],
+                                                            flow_back, back_maps)
             earned = earned > 0
 
         with self._stage("twists"):
@@ -290,23 +268,14 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow
-            camera = _concurrently(
-                compensate_camera, pts, seen_pts, reliability, flow_back, self._prev,
-                support=cfg.camera_support, threshold=cfg.camera_threshold,
-                min_shift=cfg.camera_min_shift)
-
-            def fit(back_pts: np.ndarray):
-                return fit_local_motions(
-                    pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
-                    dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(
-                        back_pts - pts, prior_nodes, (grid.rows, grid.cols), cfg.move_threshold),
-                    fit_fn=self._ops.fit_neighbourhoods)
-
-            # while the camera is fitted, the local motions are fitted as if it stood still
-            # (it usually does); where it moved they are fitted again against its motion
-            guess = None if camera.done() else fit(seen_pts)
-            flow_m, prev_m, back_pts, cam = camera.result()
-            motions = guess if guess is not None and back_pts is seen_pts else fit(back_pts)
+            flow_m, prev_m, back_pts, cam = compensate_camera(
+                pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
+                threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift)
+            motions = fit_local_motions(
+                pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
+                dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(
+                    back_pts - pts, prior_nodes, (grid.rows, grid.cols), cfg.move_threshold),
+                fit_fn=self._ops.fit_neighbourhoods)
 
         with self._stage("graph"):
             cov = local_covariances(motions.twist, grid.neighbors, self._noise_cov)
@@ -403,23 +372,20 @@ class MotionBitsSegmenter:
                    for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
-            # the twists reported: each moving MotionBit's motion refined on its own pixels
-            # (flow reads rotations low) -- those a shown MotionBit reports; refined (ECC) on
-            # the worker thread while the state is folded and the masks trimmed (nothing
-            # there writes what the refinement reads)
-            source = twist_sources(node_ids, ids, rep)
-            refined = _concurrently(refine_moving_motions, cur_g, prev_g, labels, ids, thetas,
-                                    trans, moving & set(source.values()))
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray, self._prev_rgb = cur, cur_g, cur_rgb
+            # the twists reported: each moving MotionBit's motion refined on its own pixels
+            # (flow reads rotations low) -- those a shown MotionBit reports
+            source = twist_sources(node_ids, ids, rep)
+            thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
+                                                  moving & set(source.values()))
             # the masks shown (one per group) are trimmed to the image's edges; the state
             # keeps the motion's masks (trimming them would compound from frame to frame)
             shown = snap_to_edges(group_map(labels, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
-            thetas, trans = refined.result()
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
