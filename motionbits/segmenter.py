@@ -38,7 +38,7 @@ from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
-from motionbits.retirement import Origin, retire, seen_again
+from motionbits.retirement import Origin, retire
 from motionbits.setdown import SetDown
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
@@ -244,8 +244,7 @@ class MotionBitsSegmenter:
             cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
             if self._first is None:
-                self._first = Origin(raw_prev_g, np.eye(3), np.eye(3),
-                                     self._prev.astype(np.float32))
+                self._first = Origin(raw_prev_g, np.eye(3), np.eye(3))
             pulled = pull_back(prev_g, flow_back, back_maps)
             gradient = gradient_magnitude(cur_g)
             # a carried label holds a pixel only where the flow is consistent both ways and
@@ -349,12 +348,8 @@ class MotionBitsSegmenter:
                              prev_g, disagree=cfg.merge_disagree)
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
-                                           explained=cfg.carry_tolerance, first=self._first,
-                                           relit=cfg.relit_tolerance, prev_rgb=self._prev,
-                                           cur_rgb=cur)
-            if cfg.seen_tolerance:  # where the static world shows again, no evidence of motion
-                earned &= ~seen_again(labels, earned, self._origins, self._first, cur_g,
-                                      cfg.seen_tolerance, moving)
+                                           explained=cfg.carry_tolerance,
+                                           first=self._first)
             area = np.bincount(labels.ravel())
             rep = self._groups.representatives(np.flatnonzero(area[1:]) + 1)  # ids present
             # a MotionBit born this frame is shown once it moves again, or as part of a
