@@ -13,7 +13,9 @@ H^-1 o B, relative to the camera-compensated frame. Where H is close to a rigid 
 (in-plane shake) that is rigid again; under a strong perspective change it is only
 approximately rigid -- the same approximation the static-camera model makes for bodies
 moving in depth. A camera that translates through a 3D scene sees parallax, which no
-homography removes (known limit: the moving-camera generated track).
+homography removes by itself: where the homography's residual lines up with one epipole
+over enough of the image, that residual is the static world's parallax
+(``motionbits/parallax.py``, plane + parallax) and is removed as well.
 
 A static camera fits H ~ identity; below ``min_shift`` nothing is changed at all.
 """
@@ -22,11 +24,14 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 from motionbits.flow import pixel_grid, sample_maps
 from motionbits.nodes import sample_bilinear
+from motionbits.parallax import fit_epipole, parallax_field
 
-__all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera"]
+__all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera",
+           "fit_parallax"]
 
 #: A node's flow is trusted for the camera fit above this forward-backward reliability
 #: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
@@ -66,16 +71,65 @@ def compensate_flow(flow_back: np.ndarray, h: np.ndarray) -> np.ndarray:
     return np.stack([back[..., 0] - xs, back[..., 1] - ys], -1)
 
 
-def stabilize_previous(prev: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """The previous frame in the current frame's coordinates: ``out(p) = prev(H p)``."""
+def stabilize_previous(prev: np.ndarray, h: np.ndarray,
+                       parallax: np.ndarray | None = None) -> np.ndarray:
+    """The previous frame in the current frame's coordinates: ``out(p) = prev(H (p + P(p)))``.
+
+    ``parallax`` P: optional (H, W, 2) float32 static-world parallax (:func:`fit_parallax`).
+    """
     ht, wd = prev.shape[:2]
-    return cv2.warpPerspective(prev, h, (wd, ht), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                               borderMode=cv2.BORDER_REPLICATE)
+    if parallax is None:
+        return cv2.warpPerspective(prev, h, (wd, ht),
+                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                   borderMode=cv2.BORDER_REPLICATE)
+    xs, ys = pixel_grid(ht, wd)
+    src = np.stack([xs + parallax[..., 0], ys + parallax[..., 1]], -1).reshape(1, -1, 2)
+    maps = cv2.perspectiveTransform(src.astype(np.float32), h)[0].reshape(ht, wd, 2)
+    return cv2.remap(prev, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
+                 flow_m: np.ndarray, grid_shape: tuple[int, int], *, support: float,
+                 threshold: float) -> np.ndarray | None:
+    """(H, W, 2) float32 parallax of the static world left by the homography, or None.
+
+    Parallax is looked for only in regions of clear residual (above ``threshold``) that
+    reach the image's border: the static world surrounds the view (floor, walls, the
+    background beyond the homography's plane), while a body seen whole -- a car the
+    camera follows, a pushed block -- is bounded by static pixels, and its motion can
+    line up with an epipole as well as parallax can.
+
+    Args:
+        points, residual: (n, 2) node positions (a row-major ``grid_shape`` grid) and their
+            motion relative to the homography.
+        reliable: (n,) bool, nodes whose flow is trustworthy.
+        flow_m: (H, W, 2) backward flow relative to the homography.
+        grid_shape: (rows, cols) of the node grid.
+        support: the epipole must explain the residual of at least this fraction of the
+            reliable nodes (1.0 = off).
+        threshold: px, as the homography's RANSAC threshold.
+    """
+    if support >= 1.0:
+        return None
+    clear = (reliable & (np.linalg.norm(residual, axis=1) > threshold)).reshape(grid_shape)
+    comp, _ = ndimage.label(clear, structure=np.ones((3, 3), bool))
+    edge = np.unique(np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]]))
+    world = np.isin(comp, edge[edge > 0])
+    if world.sum() < support * reliable.sum():
+        return None
+    fit = fit_epipole(points, residual, world.ravel(), threshold=threshold)
+    if fit is None or fit[1].sum() < max(8, support * reliable.sum()):
+        return None
+    h, w = flow_m.shape[:2]
+    region = cv2.resize(fit[1].reshape(grid_shape).astype(np.uint8), (w, h),
+                        interpolation=cv2.INTER_NEAREST) > 0
+    return parallax_field(flow_m, fit[0], region, threshold=threshold)
 
 
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
                       flow_back: np.ndarray, prev: np.ndarray, *, support: float,
-                      threshold: float, min_shift: float
+                      threshold: float, min_shift: float, parallax: float = 1.0,
+                      grid_shape: tuple[int, int] | None = None
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """Motion measured against the dominant (camera) motion, where there is one.
 
@@ -87,6 +141,10 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
         prev: (H, W, 3) uint8 previous frame.
         support, threshold, min_shift: as in :func:`fit_camera_motion`; ``support`` 1.0
             turns compensation off.
+        parallax: ``support`` of :func:`fit_parallax` (1.0, the default here: homography
+            only).
+        grid_shape: (rows, cols) of the node grid (``points`` row-major); needed for
+            parallax.
 
     Returns:
         (flow_m, prev_m, back_m, cam): the backward flow (H, W, 2), the previous frame and
@@ -96,10 +154,17 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     """
     if support >= 1.0:
         return flow_back, prev, back_points, None
-    cam = fit_camera_motion(points, back_points, reliability > RELIABLE, support=support,
+    reliable = reliability > RELIABLE
+    cam = fit_camera_motion(points, back_points, reliable, support=support,
                             threshold=threshold, min_shift=min_shift)
     if cam is None:
         return flow_back, prev, back_points, None
     flow_m = compensate_flow(flow_back, cam)
-    return (flow_m, stabilize_previous(prev, cam), points + sample_bilinear(flow_m, points),
-            cam)
+    back_m = points + sample_bilinear(flow_m, points)
+    par = None if grid_shape is None else fit_parallax(
+        points, back_m - points, reliable, flow_m, grid_shape, support=parallax,
+        threshold=threshold)
+    if par is not None:
+        flow_m = flow_m - par
+        back_m = points + sample_bilinear(flow_m, points)
+    return flow_m, stabilize_previous(prev, cam, par), back_m, cam
