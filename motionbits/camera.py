@@ -30,12 +30,43 @@ from motionbits.flow import pixel_grid, sample_maps
 from motionbits.nodes import sample_bilinear
 from motionbits.parallax import fit_epipole, parallax_field
 
-__all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera",
+__all__ = ["dominant_homography", "fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera",
            "fit_parallax"]
 
 #: A node's flow is trusted for the camera fit above this forward-backward reliability
 #: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
 RELIABLE = 0.5
+
+
+def dominant_homography(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray,
+                        *, threshold: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The 3x3 homography H (current -> previous, ``q ~ H p``) most nodes follow (RANSAC).
+
+    Args:
+        points, back_points: (n, 2) node positions p and their backward-flow targets q.
+        reliable: (n,) bool, nodes whose flow is trustworthy (only they vote).
+        threshold: px, RANSAC reprojection threshold.
+
+    Returns:
+        (H, inliers): H and the (n,) bool reliable nodes it explains; None with fewer than
+        8 reliable nodes or no fit.
+    """
+    p = points[reliable].astype(np.float32)
+    q = back_points[reliable].astype(np.float32)
+    if len(p) < 8:
+        return None
+    h, inl = cv2.findHomography(p, q, cv2.RANSAC, threshold, maxIters=500)
+    if h is None or inl is None:
+        return None
+    inliers = np.zeros(len(points), bool)
+    inliers[reliable] = inl.ravel() > 0
+    return h, inliers
+
+
+def _shift(points: np.ndarray, h: np.ndarray) -> float:
+    """Median px displacement of the points under h."""
+    moved = cv2.perspectiveTransform(points[None].astype(np.float64), h)[0]
+    return float(np.median(np.linalg.norm(moved - points, axis=1)))
 
 
 def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray, *,
@@ -49,17 +80,12 @@ def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.
         threshold: px, RANSAC reprojection threshold.
         min_shift: px; H is returned only if it moves the nodes by more than this (median).
     """
-    p = points[reliable].astype(np.float32)
-    q = back_points[reliable].astype(np.float32)
-    if len(p) < max(8, support * len(points) * 0.5):
+    if reliable.sum() < support * len(points) * 0.5:
         return None
-    h, inl = cv2.findHomography(p, q, cv2.RANSAC, threshold, maxIters=500)
-    if h is None or inl is None or inl.mean() < support:
+    fit = dominant_homography(points, back_points, reliable, threshold=threshold)
+    if fit is None or fit[1][reliable].mean() < support or _shift(points, fit[0]) <= min_shift:
         return None
-    moved = cv2.perspectiveTransform(points[None].astype(np.float64), h)[0]
-    if np.median(np.linalg.norm(moved - points, axis=1)) <= min_shift:
-        return None
-    return h
+    return fit[0]
 
 
 def compensate_flow(flow_back: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -90,8 +116,8 @@ def stabilize_previous(prev: np.ndarray, h: np.ndarray,
 
 def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
                  flow_m: np.ndarray, grid_shape: tuple[int, int], *, support: float,
-                 threshold: float) -> np.ndarray | None:
-    """(H, W, 2) float32 parallax of the static world left by the homography, or None.
+                 threshold: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The static world's parallax left by the homography, where there is some.
 
     Parallax is looked for only in regions of clear residual (above ``threshold``) that
     reach the image's border: the static world surrounds the view (floor, walls, the
@@ -108,6 +134,10 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
         support: the epipole must explain the residual of at least this fraction of the
             reliable nodes (1.0 = off).
         threshold: px, as the homography's RANSAC threshold.
+
+    Returns:
+        (field, explained): the (H, W, 2) float32 parallax and the (n,) bool nodes whose
+        residual it explains; None where no parallax is found.
     """
     if support >= 1.0:
         return None
@@ -123,7 +153,7 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     h, w = flow_m.shape[:2]
     region = cv2.resize(fit[1].reshape(grid_shape).astype(np.uint8), (w, h),
                         interpolation=cv2.INTER_NEAREST) > 0
-    return parallax_field(flow_m, fit[0], region, threshold=threshold)
+    return parallax_field(flow_m, fit[0], region, threshold=threshold), fit[1]
 
 
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
@@ -155,16 +185,24 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     if support >= 1.0:
         return flow_back, prev, back_points, None
     reliable = reliability > RELIABLE
-    cam = fit_camera_motion(points, back_points, reliable, support=support,
-                            threshold=threshold, min_shift=min_shift)
-    if cam is None:
+    if reliable.sum() < support * len(points) * 0.5:
         return flow_back, prev, back_points, None
+    fit = dominant_homography(points, back_points, reliable, threshold=threshold)
+    if fit is None or _shift(points, fit[0]) <= min_shift:
+        return flow_back, prev, back_points, None
+    cam, explained = fit
     flow_m = compensate_flow(flow_back, cam)
     back_m = points + sample_bilinear(flow_m, points)
     par = None if grid_shape is None else fit_parallax(
         points, back_m - points, reliable, flow_m, grid_shape, support=parallax,
         threshold=threshold)
     if par is not None:
-        flow_m = flow_m - par
-        back_m = points + sample_bilinear(flow_m, points)
-    return flow_m, stabilize_previous(prev, cam, par), back_m, cam
+        explained = explained | par[1]
+    # the static world's model (the homography and its parallax) must explain enough nodes
+    if explained[reliable].mean() < support:
+        return flow_back, prev, back_points, None
+    if par is None:
+        return flow_m, stabilize_previous(prev, cam), back_m, cam
+    flow_m = flow_m - par[0]
+    return (flow_m, stabilize_previous(prev, cam, par[0]),
+            points + sample_bilinear(flow_m, points), cam)
