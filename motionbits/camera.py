@@ -22,6 +22,8 @@ A static camera fits H ~ identity; below ``min_shift`` nothing is changed at all
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import cv2
 import numpy as np
 from scipy import ndimage
@@ -97,20 +99,25 @@ def compensate_flow(flow_back: np.ndarray, h: np.ndarray) -> np.ndarray:
     return np.stack([back[..., 0] - xs, back[..., 1] - ys], -1)
 
 
+def world_maps(h: np.ndarray, shape: tuple[int, int],
+               parallax: np.ndarray | None = None) -> np.ndarray:
+    """(H, W, 2) float32: where each pixel p of a static world was in the previous frame,
+    ``H (p + P(p))`` (``parallax`` P: optional (H, W, 2) float32, :func:`fit_parallax`)."""
+    ht, wd = shape
+    xs, ys = pixel_grid(ht, wd)
+    src = np.stack([xs, ys], -1) if parallax is None else np.stack(
+        [xs + parallax[..., 0], ys + parallax[..., 1]], -1)
+    return cv2.perspectiveTransform(src.reshape(1, -1, 2).astype(np.float32),
+                                    h)[0].reshape(ht, wd, 2)
+
+
 def stabilize_previous(prev: np.ndarray, h: np.ndarray,
                        parallax: np.ndarray | None = None) -> np.ndarray:
     """The previous frame in the current frame's coordinates: ``out(p) = prev(H (p + P(p)))``.
 
     ``parallax`` P: optional (H, W, 2) float32 static-world parallax (:func:`fit_parallax`).
     """
-    ht, wd = prev.shape[:2]
-    if parallax is None:
-        return cv2.warpPerspective(prev, h, (wd, ht),
-                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                   borderMode=cv2.BORDER_REPLICATE)
-    xs, ys = pixel_grid(ht, wd)
-    src = np.stack([xs + parallax[..., 0], ys + parallax[..., 1]], -1).reshape(1, -1, 2)
-    maps = cv2.perspectiveTransform(src.astype(np.float32), h)[0].reshape(ht, wd, 2)
+    maps = world_maps(h, prev.shape[:2], parallax)
     return cv2.remap(prev, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 
@@ -159,7 +166,9 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
                       flow_back: np.ndarray, prev: np.ndarray, *, support: float,
                       threshold: float, min_shift: float, parallax: float = 1.0,
-                      grid_shape: tuple[int, int] | None = None
+                      grid_shape: tuple[int, int] | None = None,
+                      reflow: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                      cur: np.ndarray | None = None
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """Motion measured against the dominant (camera) motion, where there is one.
 
@@ -175,6 +184,11 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
             only).
         grid_shape: (rows, cols) of the node grid (``points`` row-major); needed for
             parallax.
+        reflow, cur: a flow backend ``flow(a, b) -> (H, W, 2)`` and the (H, W, 3) uint8
+            current frame: the motion the homography leaves is then measured again, as the
+            flow from ``cur`` to the previous frame warped by the homography (small
+            displacements, which a coarse-to-fine flow such as DIS measures better than the
+            camera's large ones); None: ``flow_back`` composed with the homography.
 
     Returns:
         (flow_m, prev_m, back_m, cam): the backward flow (H, W, 2), the previous frame and
@@ -191,7 +205,10 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     if fit is None or _shift(points, fit[0]) <= min_shift:
         return flow_back, prev, back_points, None
     cam, explained = fit
-    flow_m = compensate_flow(flow_back, cam)
+    if reflow is None or cur is None:
+        flow_m = compensate_flow(flow_back, cam)
+    else:
+        flow_m = np.asarray(reflow(cur, stabilize_previous(prev, cam)), np.float32)
     back_m = points + sample_bilinear(flow_m, points)
     par = None if grid_shape is None else fit_parallax(
         points, back_m - points, reliable, flow_m, grid_shape, support=parallax,
@@ -201,8 +218,17 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     # the static world's model (the homography and its parallax) must explain enough nodes
     if explained[reliable].mean() < support:
         return flow_back, prev, back_points, None
-    if par is None:
-        return flow_m, stabilize_previous(prev, cam), back_m, cam
-    flow_m = flow_m - par[0]
-    return (flow_m, stabilize_previous(prev, cam, par[0]),
-            points + sample_bilinear(flow_m, points), cam)
+    par_field = None if par is None else par[0]
+    maps = world_maps(cam, flow_m.shape[:2], par_field)
+    prev_m = cv2.remap(prev, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    if par_field is not None:
+        flow_m = flow_m - par_field
+    # what has just come into view (its static-world source lies outside the previous
+    # frame) has no measurable motion: its flow is extrapolated, not observed
+    ht, wd = flow_m.shape[:2]
+    entered = ((maps[..., 0] < 0) | (maps[..., 0] > wd - 1) | (maps[..., 1] < 0)
+               | (maps[..., 1] > ht - 1))
+    import os
+    if os.environ.get("MB_NOENTER") != "1":
+        flow_m[entered] = 0.0
+    return flow_m, prev_m, points + sample_bilinear(flow_m, points), cam

@@ -144,6 +144,11 @@ class MotionBitsConfig:
     # parallax where one epipole explains the residual (above camera_threshold) of at least
     # this fraction of the reliable nodes; it is removed too (1.0 = homography only)
     camera_parallax: float = 0.1
+    # ours: the motion the homography leaves is measured by a second flow, from the frame
+    # to the previous frame warped by the homography (small displacements, which DIS
+    # measures better than the camera's); False = the first flow composed with H (exact
+    # flows, e.g. the oracle baseline, need no second pass)
+    camera_reflow: bool = True
 
     # --- pixel masks and identities (ours) ---
     min_cluster_nodes: int = 4  # clusters with fewer nodes are noise

@@ -86,11 +86,19 @@ def fit_epipole(points: np.ndarray, residual: np.ndarray, candidates: np.ndarray
     if not len(hyp):
         return None
     dists = np.stack([epipolar_distance(p, residual[idx], e)[0] for e in hyp])
-    best = hyp[np.argmax((dists < threshold).sum(1))]
+    # MSAC: truncated squared distances, so that the most precise of the hypotheses with
+    # many inliers wins
+    best = hyp[np.argmin((np.minimum(dists, threshold) ** 2).sum(1))]
     inl = epipolar_distance(p, residual[idx], best)[0] < threshold
-    # least squares: the point closest (algebraically) to all inlier lines
-    e = np.linalg.svd(lines[inl])[2][-1]
-    if (epipolar_distance(p, residual[idx], e)[0] < threshold).sum() >= inl.sum():
+    # least squares on the inliers, each residual line weighted so that its term is the
+    # residual's px distance from its epipolar line (one reweighting step from ``best``)
+    hp = _homogeneous(p[inl])
+    e0 = best / np.linalg.norm(best)
+    across = np.linalg.norm(np.cross(hp, e0)[:, :2], axis=1)
+    weight = np.linalg.norm(residual[idx][inl], axis=1) / np.maximum(across, 1e-9)
+    e = np.linalg.svd(lines[inl] * weight[:, None])[2][-1]
+    cost = lambda x: np.minimum(epipolar_distance(p, residual[idx], x)[0], threshold) ** 2
+    if cost(e).sum() <= cost(best).sum():
         best = e
     out = np.zeros(len(points), bool)
     out[idx] = epipolar_distance(p, residual[idx], best)[0] < threshold
