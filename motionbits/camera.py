@@ -209,6 +209,15 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
         flow_m = compensate_flow(flow_back, cam)
     else:
         flow_m = np.asarray(reflow(cur, stabilize_previous(prev, cam)), np.float32)
+        # the second flow's small displacements also correct the homography (the first
+        # flow's are biased where texture runs one way: wood grain, stripes)
+        fix = dominant_homography(points, points + sample_bilinear(flow_m, points), reliable,
+                                  threshold=threshold)
+        if fix is not None:
+            cam = cam @ fix[0]
+            cam /= cam[2, 2]
+            explained = fix[1]
+            flow_m = compensate_flow(flow_m, fix[0])
     back_m = points + sample_bilinear(flow_m, points)
     par = None if grid_shape is None else fit_parallax(
         points, back_m - points, reliable, flow_m, grid_shape, support=parallax,
@@ -228,7 +237,5 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     ht, wd = flow_m.shape[:2]
     entered = ((maps[..., 0] < 0) | (maps[..., 0] > wd - 1) | (maps[..., 1] < 0)
                | (maps[..., 1] > ht - 1))
-    import os
-    if os.environ.get("MB_NOENTER") != "1":
-        flow_m[entered] = 0.0
+    flow_m[entered] = 0.0
     return flow_m, prev_m, points + sample_bilinear(flow_m, points), cam
