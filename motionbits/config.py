@@ -61,6 +61,8 @@ _RANGES = {
     "merge_agree": "[0, inf)",
     "merge_disagree": "[0, inf)",
     "retire_margin": "[0, inf)",
+    "relit_tolerance": "[0, inf)",
+    "seen_tolerance": "[0, inf)",
     "refine_min_iou": "[0, 1]",
     "refine_max_outside": "[0, 1]",
 }
@@ -178,6 +180,14 @@ class MotionBitsConfig:
     # ours (motionbits/retirement.py): a MotionBit is retired when the static world explains
     # its pixels better, by this many grey levels, than its own motion since its birth
     retire_margin: float = 5.0
+    # ours: ... also when it explains them within relit_tolerance grey levels up to a local
+    # brightness gain, the same on every colour channel (a moving shadow, a reflection,
+    # a flicker; 0 = off)
+    relit_tolerance: float = 10.0
+    # ours (retirement.seen_again): where the static world is seen again -- the first frame
+    # or the one before a MotionBit's birth matches the pixel within seen_tolerance grey
+    # levels (5x5 mean) -- the pixel loses its evidence of motion (0 = off)
+    seen_tolerance: float = 6.0
 
     # --- optional learned refinement (paper Sec. 5.3: SAM2 prompted per MotionBit) ---
     # "none" (default) or "sam2": each frame's masks are refined by SAM2 from `sam2_path`

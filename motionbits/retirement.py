@@ -6,7 +6,13 @@ stops, and a stopped MotionBit keeps its mask -- so it would stay for good. The 
 tells it from a body that really moved and stopped: keep the frame before its birth, and the motion accumulated since (current -> that frame) both of
 the MotionBit and of the static world (the camera's motion; identity for a static camera).
 If the world's motion explains the MotionBit's pixels today clearly better than its own
-accumulated motion does, it never moved: it is retired.
+accumulated motion does, it never moved: it is retired. A moving shadow or a light change
+is explained by the static world too, once a local brightness gain is allowed -- the same
+gain on every colour channel, so that a body of another colour is not.
+
+The same images tell, pixel by pixel, where the static world is seen again
+(:func:`seen_again`): a pixel that looks as it did in the first frame or before its
+MotionBit's birth shows no motion, whatever label the flow carried there.
 """
 
 from __future__ import annotations
@@ -19,13 +25,24 @@ from scipy import ndimage
 
 from motionbits.twists import rigid_matrix
 
-__all__ = ["Origin", "origin_residuals", "moved_evidence", "retire"]
+__all__ = ["Origin", "origin_residuals", "moved_evidence", "retire", "seen_again"]
 
 #: px: below this median distance between where a MotionBit's own and the world's
 #: accumulated motions put its pixels, the two cannot be told apart (no verdict).
 MIN_SEPARATION = 2.0
 #: About this many of a MotionBit's pixels measure that distance.
 SEPARATION_SAMPLES = 200
+#: px: side of the square over which a local brightness gain is estimated (a shadow's or
+#: a light's gain is smooth over it) ...
+GAIN_WINDOW = 9
+#: ... within [MIN_GAIN, 1 / MIN_GAIN], with this many grey levels added to each channel
+#: first (dark pixels have noisy ratios) ...
+MIN_GAIN, GAIN_OFFSET = 0.25, 8.0
+#: ... and only a gain this far from 1 (log) is a light change: near 1 the plain
+#: residual decides.
+MIN_LOG_GAIN = 0.14
+#: px: side of the square over which :func:`seen_again` averages residuals.
+SEEN_WINDOW = 5
 
 
 @dataclass
@@ -36,11 +53,13 @@ class Origin:
         frame: (H, W) float32 grey frame before its birth (shared, never modified).
         body: (3, 3) accumulated backward motion of the MotionBit (current -> birth frame).
         world: (3, 3) accumulated backward motion of the static world.
+        colour: (H, W, 3) float32 RGB of ``frame``, or None (then no light-change test).
     """
 
     frame: np.ndarray
     body: np.ndarray
     world: np.ndarray
+    colour: np.ndarray | None = None
 
     def advance(self, body_step: np.ndarray, world_step: np.ndarray) -> None:
         """Compose one more frame's (3, 3) backward motions (current -> previous)."""
@@ -48,18 +67,51 @@ class Origin:
         self.world = self.world @ world_step
 
 
-def _residual(frame: np.ndarray, motion: np.ndarray, cur: np.ndarray, box, inside) -> float:
-    """Mean |cur - frame pulled back by ``motion``| over ``inside`` of the image box ``box``
-    (NaN if less than half of those pixels come from inside ``frame``)."""
+def _pull(frame: np.ndarray, motion: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+    """``frame`` (H, W) or (H, W, C) pulled back by the (3, 3) ``motion`` onto the image box
+    ``box``: ``out(p) = frame(motion p)``, NaN where that falls outside ``frame``."""
     to_frame = motion @ np.array(
         [[1.0, 0.0, box[1].start], [0.0, 1.0, box[0].start], [0.0, 0.0, 1.0]])
     size = (box[1].stop - box[1].start, box[0].stop - box[0].start)
-    warped = cv2.warpPerspective(frame, to_frame, size,
-                                 flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                 borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
-    diff = np.abs(cur[box] - warped)[inside]
-    diff = diff[np.isfinite(diff)]
-    return float(diff.mean()) if diff.size > 0.5 * inside.sum() else np.nan
+    nan = (np.nan,) * (frame.shape[2] if frame.ndim == 3 else 1)
+    return cv2.warpPerspective(frame, to_frame, size,
+                               flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=nan)
+
+
+def _mean_inside(diff: np.ndarray, inside: np.ndarray) -> float:
+    """Mean of the finite ``diff`` over ``inside``; NaN if under half of it is finite."""
+    d = diff[inside]
+    d = d[np.isfinite(d)]
+    return float(d.mean()) if d.size > 0.5 * inside.sum() else np.nan
+
+
+def _residual(frame: np.ndarray, motion: np.ndarray, cur: np.ndarray, box, inside) -> float:
+    """Mean |cur - frame pulled back by ``motion``| over ``inside`` of the image box ``box``
+    (NaN if less than half of those pixels come from inside ``frame``)."""
+    return _mean_inside(np.abs(cur[box] - _pull(frame, motion, box)), inside)
+
+
+def relit_residual(colour: np.ndarray, motion: np.ndarray, cur_rgb: np.ndarray, box, inside
+                   ) -> float:
+    """Mean colour residual (grey levels, mean over channels) over ``inside`` of the image
+    box ``box`` of ``cur_rgb`` against the (H, W, 3) ``colour`` frame pulled back by
+    ``motion`` and scaled by the local brightness gain (one per pixel, the same on every
+    channel: ratio of ``GAIN_WINDOW`` square means of the channel sums).
+
+    NaN where under half of the pixels come from inside the frame, or where the median
+    gain is within ``MIN_LOG_GAIN`` of 1 (no light change: the plain residual decides)."""
+    ref = _pull(colour, motion, box)
+    valid = np.isfinite(ref[..., 0])
+    ref = np.where(valid[..., None], ref + GAIN_OFFSET, 0).astype(np.float32)
+    cur = cur_rgb[box] + GAIN_OFFSET
+    k = (GAIN_WINDOW, GAIN_WINDOW)
+    num = cv2.blur(np.where(valid, cur.sum(axis=2), 0).astype(np.float32), k)
+    gain = np.clip(num / np.maximum(cv2.blur(ref.sum(axis=2), k), 1e-3), MIN_GAIN, 1 / MIN_GAIN)
+    sel = inside & valid
+    if sel.sum() <= 0.5 * inside.sum() or abs(np.log(np.median(gain[sel]))) < MIN_LOG_GAIN:
+        return np.nan
+    return float(np.abs(cur - gain[..., None] * ref).mean(axis=2)[sel].mean())
 
 
 def origin_residuals(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
@@ -100,18 +152,12 @@ def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
     return world - body
 
 
-def _world_residual(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
-                    box: tuple[slice, slice]) -> float:
-    """:func:`_residual` of the static world's motion over the pixels ``mask`` of the
-    image box ``box``."""
-    return _residual(origin.frame, origin.world, cur_gray, box, mask)
-
-
 def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
            thetas: np.ndarray, trans: np.ndarray, first_new: int, cam: np.ndarray | None,
            prev_gray: np.ndarray, cur_gray: np.ndarray, margin: float, *,
-           explained: float = np.inf, first: Origin | None = None
-           ) -> tuple[np.ndarray, dict[int, Origin]]:
+           explained: float = np.inf, first: Origin | None = None,
+           relit: float = 0.0, prev_rgb: np.ndarray | None = None,
+           cur_rgb: np.ndarray | None = None) -> tuple[np.ndarray, dict[int, Origin]]:
     """Advance every MotionBit's origin by this frame's motions and retire those whose
     pixels the static world explains -- within ``explained`` grey levels (mean residual),
     from the frame before the MotionBit's birth or from the stream's first frame
@@ -119,7 +165,10 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
     accumulated motion (:func:`origin_residuals`). Where no frame explains them (a body
     carried and set down: the fitted motion of a body lowered in depth drifts, and the
     static world shows what was there before it arrived) the MotionBit stays; the first
-    frame still explains background that an arm covered at a MotionBit's birth.
+    frame still explains background that an arm covered at a MotionBit's birth. A
+    MotionBit whose pixels the static world explains within ``relit`` grey levels up to a
+    light change (:func:`relit_residual`: a shadow, a reflection, a flicker), and better
+    than its own motion by ``margin``, is retired too.
 
     Args:
         labels: (H, W) int32 label map of this frame.
@@ -135,6 +184,9 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         explained: grey levels (config ``carry_tolerance``).
         first: the stream's first frame with the static world's motion since (its ``body``
             is not used; advanced in place), or None.
+        relit: grey levels (config ``relit_tolerance``; 0 = no light-change test).
+        prev_rgb, cur_rgb: (H, W, 3) float32 RGB of the previous (not stabilised) and
+            current frames (needed for ``relit``).
 
     Returns:
         ``labels`` without the retired MotionBits, and the origins of those present.
@@ -149,7 +201,7 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         first.advance(world, world)
     for i, box in boxes.items():
         if i >= first_new:
-            origins[i] = Origin(prev_gray, np.eye(3), np.eye(3))
+            origins[i] = Origin(prev_gray, np.eye(3), np.eye(3), prev_rgb)
         origin = origins.get(i)
         if origin is None:
             continue
@@ -157,11 +209,60 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         mask = labels[box] == i
         world_res, body_res = origin_residuals(origin, cur_gray, mask, MIN_SEPARATION,
                                                (box[0].start, box[1].start))
-        if first is not None and np.isfinite(body_res):
-            from_first = _world_residual(first, cur_gray, mask, box)  # box: find_objects
+        if not np.isfinite(body_res):
+            continue
+        frames = (origin,) if first is None else (origin, first)
+        if first is not None:
+            from_first = _residual(first.frame, first.world, cur_gray, box, mask)
             if np.isnan(world_res) or from_first < world_res:  # NaN: out of view then
                 world_res = from_first
-        if world_res < explained and world_res - body_res < -margin:
+        still = world_res < explained and world_res - body_res < -margin
+        if not still and relit and cur_rgb is not None:
+            lit = [relit_residual(o.colour, o.world, cur_rgb, box, mask)
+                   for o in frames if o.colour is not None]
+            still = any(r < relit and r - body_res < -margin for r in lit)
+        if still:
             out = np.where(out == i, 0, out)
             del origins[i]
     return out, origins
+
+
+def seen_again(labels: np.ndarray, origins: dict[int, Origin], first: Origin | None,
+               cur_gray: np.ndarray, tolerance: float, ids=None) -> np.ndarray:
+    """(H, W) bool: pixels of a MotionBit where the static world is seen again -- the frame
+    before the MotionBit's birth or the stream's first frame, pulled back by the static
+    world's accumulated motion, matches the current frame within ``tolerance`` grey levels
+    (mean over a ``SEEN_WINDOW`` square).
+
+    Such a pixel shows no motion now, whatever label the flow carried onto it (the table a
+    hand passed over, a shadow's wake): it loses the evidence that lets a carried label
+    beat the background on a flat region (the ``earned`` map of
+    :func:`motionbits.masks.assign_pixels`). A flat body over its own earlier place is
+    seen again too, but it never had that evidence (its flat interior is held by the
+    hole filling of its outline).
+
+    Args:
+        labels: (H, W) int32 label map of this frame.
+        origins: id -> :class:`Origin` of the MotionBits present (as :func:`retire` leaves them).
+        first: the stream's first frame (advanced to this frame), or None.
+        cur_gray: (H, W) float32 current grey frame.
+        tolerance: grey levels (config ``seen_tolerance``).
+    """
+    out = np.zeros(labels.shape, bool)
+    h, w = labels.shape
+    pad = SEEN_WINDOW
+    for i, box in enumerate(ndimage.find_objects(labels), start=1):
+        origin = origins.get(i)
+        if box is None or (origin is None and first is None) or (ids is not None and i not in ids):
+            continue
+        big = (slice(max(box[0].start - pad, 0), min(box[0].stop + pad, h)),
+               slice(max(box[1].start - pad, 0), min(box[1].stop + pad, w)))
+        best = np.full((big[0].stop - big[0].start, big[1].stop - big[1].start), np.inf,
+                       np.float32)
+        for o in (origin, first):
+            if o is not None:
+                diff = cv2.blur(np.abs(cur_gray[big] - _pull(o.frame, o.world, big)),
+                                (SEEN_WINDOW, SEEN_WINDOW))
+                best = np.fmin(best, diff)
+        out[big] |= (labels[big] == i) & (best < tolerance)
+    return out
