@@ -42,17 +42,20 @@ def epipolar_distance(points: np.ndarray, residual: np.ndarray, e: np.ndarray
     Args:
         points: (..., 2) float positions p.
         residual: (..., 2) float residual motion r at p.
-        e: (3,) homogeneous epipole.
+        e: (3,) homogeneous epipole, or (3, ...) several, broadcast against the points.
 
     Returns:
         (dist, u): (...) px distance of ``p + r`` from the line through p and e, and
         (..., 2) the line's unit direction at p (0 where p is the epipole).
     """
-    line = np.cross(_homogeneous(points.astype(np.float64)), np.asarray(e, np.float64))
-    norm = np.hypot(line[..., 0], line[..., 1])
+    e = np.asarray(e, np.float64)
+    # the line p x e through p = (x, y, 1) and e: (y e_w - e_y, e_x - x e_w, ...)
+    lx = points[..., 1] * e[2] - e[1]
+    ly = e[0] - points[..., 0] * e[2]
+    norm = np.hypot(lx, ly)
     safe = np.where(norm > 1e-12, norm, 1.0)
-    dist = np.abs(line[..., 0] * residual[..., 0] + line[..., 1] * residual[..., 1]) / safe
-    u = np.stack([line[..., 1], -line[..., 0]], -1) / safe[..., None]
+    dist = np.abs(lx * residual[..., 0] + ly * residual[..., 1]) / safe
+    u = np.stack([ly, -lx], -1) / safe[..., None]
     return dist, np.where((norm > 1e-12)[..., None], u, 0.0)
 
 
@@ -85,7 +88,8 @@ def fit_epipole(points: np.ndarray, residual: np.ndarray, candidates: np.ndarray
     hyp = hyp[np.linalg.norm(hyp, axis=1) > 1e-12]
     if not len(hyp):
         return None
-    dists = np.stack([epipolar_distance(p, residual[idx], e)[0] for e in hyp])
+    # all hypotheses scored at once: (hypotheses, candidates)
+    dists = epipolar_distance(p[None], residual[idx][None], hyp.T[:, :, None])[0]
     # MSAC: truncated squared distances, so that the most precise of the hypotheses with
     # many inliers wins
     best = hyp[np.argmin((np.minimum(dists, threshold) ** 2).sum(1))]
@@ -96,7 +100,7 @@ def fit_epipole(points: np.ndarray, residual: np.ndarray, candidates: np.ndarray
     e0 = best / np.linalg.norm(best)
     across = np.linalg.norm(np.cross(hp, e0)[:, :2], axis=1)
     weight = np.linalg.norm(residual[idx][inl], axis=1) / np.maximum(across, 1e-9)
-    e = np.linalg.svd(lines[inl] * weight[:, None])[2][-1]
+    e = np.linalg.svd(lines[inl] * weight[:, None], full_matrices=False)[2][-1]
     cost = lambda x: np.minimum(epipolar_distance(p, residual[idx], x)[0], threshold) ** 2
     if cost(e).sum() <= cost(best).sum():
         best = e
