@@ -208,7 +208,7 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     if reflow is None or cur is None:
         flow_m = compensate_flow(flow_back, cam)
     else:
-        flow_m = np.asarray(reflow(cur, stabilize_previous(prev, cam)), np.float32)
+        flow_m = np.array(reflow(cur, stabilize_previous(prev, cam)), np.float32)  # a copy
         # the second flow's small displacements also correct the homography (the first
         # flow's are biased where texture runs one way: wood grain, stripes)
         fix = dominant_homography(points, points + sample_bilinear(flow_m, points), reliable,
