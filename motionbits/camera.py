@@ -178,8 +178,9 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
             nodes above ``RELIABLE`` fit the camera.
         flow_back: (H, W, 2) float32 backward flow (current -> previous).
         prev: (H, W, 3) uint8 previous frame.
-        support, threshold, min_shift: as in :func:`fit_camera_motion`; ``support`` 1.0
-            turns compensation off.
+        support, threshold, min_shift: as in :func:`fit_camera_motion`, except that
+            ``support`` counts the nodes the homography *or* the parallax explains;
+            ``support`` 1.0 turns compensation off.
         parallax: ``support`` of :func:`fit_parallax` (1.0, the default here: homography
             only).
         grid_shape: (rows, cols) of the node grid (``points`` row-major); needed for
@@ -192,8 +193,8 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
 
     Returns:
         (flow_m, prev_m, back_m, cam): the backward flow (H, W, 2), the previous frame and
-        the nodes' backward targets (n, 2) relative to the camera, and the camera's 3x3
-        homography -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects)
+        the nodes' backward targets (n, 2) relative to the static world (homography and
+        parallax; 0 flow where the view just entered), and the camera's 3x3 homography -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects)
         when no camera motion is found.
     """
     if support >= 1.0:
