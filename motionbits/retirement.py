@@ -92,10 +92,23 @@ def _residual(frame: np.ndarray, motion: np.ndarray, cur: np.ndarray, box, insid
     return _mean_inside(np.abs(cur[box] - _pull(frame, motion, box)), inside)
 
 
+def _darker_or_brighter(origin: Origin, cur_gray: np.ndarray, box, inside) -> bool:
+    """Whether the mean grey level over ``inside`` of the image box ``box`` changed by a
+    gain at least half ``MIN_LOG_GAIN`` away from 1 since ``origin``'s frame (pulled back by
+    the static world's motion): a cheap test before :func:`relit_residual`."""
+    ref = _pull(origin.frame, origin.world, box)[inside]
+    ok = np.isfinite(ref)
+    if ok.sum() <= 0.5 * inside.sum():
+        return False
+    ratio = (cur_gray[box][inside][ok].mean() + GAIN_OFFSET) / (ref[ok].mean() + GAIN_OFFSET)
+    return abs(np.log(ratio)) >= 0.5 * MIN_LOG_GAIN
+
+
 def relit_residual(colour: np.ndarray, motion: np.ndarray, cur_rgb: np.ndarray, box, inside
                    ) -> float:
     """Mean colour residual (grey levels, mean over channels) over ``inside`` of the image
-    box ``box`` of ``cur_rgb`` against the (H, W, 3) ``colour`` frame pulled back by
+    box ``box`` of ``cur_rgb`` ((H, W, 3), any dtype) against the (H, W, 3) float32
+    ``colour`` frame pulled back by
     ``motion`` and scaled by the local brightness gain (one per pixel, the same on every
     channel: ratio of ``GAIN_WINDOW`` square means of the channel sums).
 
@@ -104,7 +117,7 @@ def relit_residual(colour: np.ndarray, motion: np.ndarray, cur_rgb: np.ndarray, 
     ref = _pull(colour, motion, box)
     valid = np.isfinite(ref[..., 0])
     ref = np.where(valid[..., None], ref + GAIN_OFFSET, 0).astype(np.float32)
-    cur = cur_rgb[box] + GAIN_OFFSET
+    cur = cur_rgb[box].astype(np.float32) + GAIN_OFFSET
     k = (GAIN_WINDOW, GAIN_WINDOW)
     num = cv2.blur(np.where(valid, cur.sum(axis=2), 0).astype(np.float32), k)
     gain = np.clip(num / np.maximum(cv2.blur(ref.sum(axis=2), k), 1e-3), MIN_GAIN, 1 / MIN_GAIN)
@@ -185,8 +198,8 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         first: the stream's first frame with the static world's motion since (its ``body``
             is not used; advanced in place), or None.
         relit: grey levels (config ``relit_tolerance``; 0 = no light-change test).
-        prev_rgb, cur_rgb: (H, W, 3) float32 RGB of the previous (not stabilised) and
-            current frames (needed for ``relit``).
+        prev_rgb, cur_rgb: (H, W, 3) RGB (uint8 or float32) of the previous (not
+            stabilised) and current frames (needed for ``relit``).
 
     Returns:
         ``labels`` without the retired MotionBits, and the origins of those present.
@@ -199,9 +212,12 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
     out = labels
     if first is not None:
         first.advance(world, world)
+    born_rgb = None  # prev_rgb as float32, once
     for i, box in boxes.items():
         if i >= first_new:
-            origins[i] = Origin(prev_gray, np.eye(3), np.eye(3), prev_rgb)
+            if born_rgb is None and prev_rgb is not None:
+                born_rgb = prev_rgb.astype(np.float32)
+            origins[i] = Origin(prev_gray, np.eye(3), np.eye(3), born_rgb)
         origin = origins.get(i)
         if origin is None:
             continue
@@ -217,9 +233,10 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
             if np.isnan(world_res) or from_first < world_res:  # NaN: out of view then
                 world_res = from_first
         still = world_res < explained and world_res - body_res < -margin
-        if not still and relit and cur_rgb is not None:
+        if not still and relit and cur_rgb is not None and body_res > margin:
             lit = [relit_residual(o.colour, o.world, cur_rgb, box, mask)
-                   for o in frames if o.colour is not None]
+                   for o in frames if o.colour is not None and _darker_or_brighter(
+                       o, cur_gray, box, mask)]
             still = any(r < relit and r - body_res < -margin for r in lit)
         if still:
             out = np.where(out == i, 0, out)
@@ -227,42 +244,48 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
     return out, origins
 
 
-def seen_again(labels: np.ndarray, origins: dict[int, Origin], first: Origin | None,
-               cur_gray: np.ndarray, tolerance: float, ids=None) -> np.ndarray:
-    """(H, W) bool: pixels of a MotionBit where the static world is seen again -- the frame
-    before the MotionBit's birth or the stream's first frame, pulled back by the static
-    world's accumulated motion, matches the current frame within ``tolerance`` grey levels
-    (mean over a ``SEEN_WINDOW`` square).
+def seen_again(labels: np.ndarray, earned: np.ndarray, origins: dict[int, Origin],
+               first: Origin | None, cur_gray: np.ndarray, tolerance: float, ids
+               ) -> np.ndarray:
+    """(H, W) bool: ``earned`` pixels of the MotionBits ``ids`` where the static world is
+    seen again -- the frame before the MotionBit's birth or the stream's first frame,
+    pulled back by the static world's accumulated motion, matches the current frame within
+    ``tolerance`` grey levels (mean over a ``SEEN_WINDOW`` square).
 
     Such a pixel shows no motion now, whatever label the flow carried onto it (the table a
     hand passed over, a shadow's wake): it loses the evidence that lets a carried label
-    beat the background on a flat region (the ``earned`` map of
-    :func:`motionbits.masks.assign_pixels`). A flat body over its own earlier place is
-    seen again too, but it never had that evidence (its flat interior is held by the
-    hole filling of its outline).
+    beat the background on a flat region (``earned``, see
+    :func:`motionbits.masks.assign_pixels`). Only moving MotionBits are tested: a body
+    that moved a little and stopped looks much as it did before it moved, and keeps its
+    mask by that evidence.
 
     Args:
         labels: (H, W) int32 label map of this frame.
+        earned: (H, W) bool evidence of motion of each pixel's label.
         origins: id -> :class:`Origin` of the MotionBits present (as :func:`retire` leaves them).
         first: the stream's first frame (advanced to this frame), or None.
         cur_gray: (H, W) float32 current grey frame.
         tolerance: grey levels (config ``seen_tolerance``).
+        ids: the MotionBits to test (those moving now).
     """
     out = np.zeros(labels.shape, bool)
     h, w = labels.shape
-    pad = SEEN_WINDOW
-    for i, box in enumerate(ndimage.find_objects(labels), start=1):
-        origin = origins.get(i)
-        if box is None or (origin is None and first is None) or (ids is not None and i not in ids):
+    pad = SEEN_WINDOW // 2
+    tested = np.where(earned & np.isin(labels, list(ids)), labels, 0)
+    for i, box in enumerate(ndimage.find_objects(tested), start=1):
+        if box is None:
             continue
+        refs = [o for o in (origins.get(i), first) if o is not None]
+        if len(refs) == 2 and refs[0].frame is refs[1].frame and np.allclose(
+                refs[0].world, refs[1].world):
+            refs = refs[:1]  # born at the first frame: one reference
         big = (slice(max(box[0].start - pad, 0), min(box[0].stop + pad, h)),
                slice(max(box[1].start - pad, 0), min(box[1].stop + pad, w)))
-        best = np.full((big[0].stop - big[0].start, big[1].stop - big[1].start), np.inf,
-                       np.float32)
-        for o in (origin, first):
-            if o is not None:
-                diff = cv2.blur(np.abs(cur_gray[big] - _pull(o.frame, o.world, big)),
-                                (SEEN_WINDOW, SEEN_WINDOW))
-                best = np.fmin(best, diff)
-        out[big] |= (labels[big] == i) & (best < tolerance)
+        best = None
+        for o in refs:
+            diff = cv2.blur(np.abs(cur_gray[big] - _pull(o.frame, o.world, big)),
+                            (SEEN_WINDOW, SEEN_WINDOW))
+            best = diff if best is None else np.fmin(best, diff)
+        if best is not None:
+            out[big] |= (tested[big] == i) & (best < tolerance)
     return out

@@ -123,7 +123,6 @@ class MotionBitsSegmenter:
         self._seeds: np.ndarray | None = None
         self._prev: np.ndarray | None = None
         self._prev_gray: np.ndarray | None = None  # (h, w) float32 grey of ``_prev``
-        self._prev_rgb: np.ndarray | None = None  # (h, w, 3) float32 of ``_prev``
         self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
         # label history and largest earlier edge weights (whole video or config.window)
         self._temporal: TemporalState | None = None
@@ -227,7 +226,7 @@ class MotionBitsSegmenter:
         with self._stage("resize"):
             cur = self._to_work(frame)
         if self._prev is None:
-            self._prev, self._prev_gray, self._prev_rgb = cur, _gray(cur), cur.astype(np.float32)
+            self._prev, self._prev_gray = cur, _gray(cur)
             return self._empty_result()
         cfg, grid = self.config, self._grid
         with self._stage("flow"):
@@ -243,7 +242,8 @@ class MotionBitsSegmenter:
             cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
             if self._first is None:
-                self._first = Origin(raw_prev_g, np.eye(3), np.eye(3), self._prev_rgb)
+                self._first = Origin(raw_prev_g, np.eye(3), np.eye(3),
+                                     self._prev.astype(np.float32))
             pulled = pull_back(prev_g, flow_back)
             gradient = gradient_magnitude(cur_g)
             # a carried label holds a pixel only where the flow is consistent both ways and
@@ -347,14 +347,13 @@ class MotionBitsSegmenter:
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
                              first_new, hist_nodes, seen_pts, back_pts, reliability, cur_g,
                              prev_g, disagree=cfg.merge_disagree)
-            cur_rgb = cur.astype(np.float32)
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance, first=self._first,
-                                           relit=cfg.relit_tolerance, prev_rgb=self._prev_rgb,
-                                           cur_rgb=cur_rgb)
+                                           relit=cfg.relit_tolerance, prev_rgb=self._prev,
+                                           cur_rgb=cur)
             if cfg.seen_tolerance:  # where the static world shows again, no evidence of motion
-                earned &= ~seen_again(labels, self._origins, self._first, cur_g,
+                earned &= ~seen_again(labels, earned, self._origins, self._first, cur_g,
                                       cfg.seen_tolerance, moving)
             area = np.bincount(labels.ravel())
             rep = self._groups.representatives(np.flatnonzero(area[1:]) + 1)  # ids present
@@ -376,7 +375,7 @@ class MotionBitsSegmenter:
             self._labels = labels
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
-            self._prev, self._prev_gray, self._prev_rgb = cur, cur_g, cur_rgb
+            self._prev, self._prev_gray = cur, cur_g
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low) -- those a shown MotionBit reports
             source = twist_sources(node_ids, ids, rep)

@@ -74,7 +74,13 @@ def test_seen_again_marks_only_pixels_that_look_as_before():
     now[:, 90:] = np.clip(first[:, 90:] + 60, 0, 255)  # right part: something else is there
     labels = np.zeros((H, W), np.int32)
     labels[30:90, 40:140] = 4
-    seen = seen_again(labels, {}, Origin(_gray(first), np.eye(3), np.eye(3)), _gray(now), 6.0)
-    assert not seen[labels == 0].any()  # only MotionBit pixels
-    assert seen[30:90, 40:85].all()  # unchanged part (5x5 mean off the changed edge)
-    assert not seen[30:90, 95:140].any()
+    earned = labels > 0
+    earned[30:40] = False
+    first_frame = Origin(_gray(first), np.eye(3), np.eye(3))
+    seen = seen_again(labels, earned, {}, first_frame, _gray(now), 6.0, {4})
+    assert not seen[labels == 0].any()  # only MotionBit pixels ...
+    assert not seen[30:40].any()  # ... with evidence of motion
+    assert seen[40:90, 40:85].all()  # unchanged part (5x5 mean off the changed edge)
+    assert not seen[40:90, 95:140].any()
+    # only the MotionBits asked for (those moving)
+    assert not seen_again(labels, earned, {}, first_frame, _gray(now), 6.0, {3}).any()
