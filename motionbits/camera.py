@@ -149,18 +149,28 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     if support >= 1.0:
         return None
     clear = (reliable & (np.linalg.norm(residual, axis=1) > threshold)).reshape(grid_shape)
-    comp, _ = ndimage.label(clear, structure=np.ones((3, 3), bool))
-    edge = np.unique(np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]]))
-    world = np.isin(comp, edge[edge > 0])
+    world = _reaching_border(clear)
     if world.sum() < support * reliable.sum():
         return None
     fit = fit_epipole(points, residual, world.ravel(), threshold=threshold)
-    if fit is None or fit[1].sum() < max(8, support * reliable.sum()):
+    if fit is None:
+        return None
+    # ... and the nodes that fit the epipole must reach the border themselves (an arm
+    # that enters the view joins what it carries to the border, but does not fit e)
+    explained = _reaching_border(fit[1].reshape(grid_shape))
+    if explained.sum() < max(8, support * reliable.sum()):
         return None
     h, w = flow_m.shape[:2]
-    region = cv2.resize(fit[1].reshape(grid_shape).astype(np.uint8), (w, h),
+    region = cv2.resize(explained.astype(np.uint8), (w, h),
                         interpolation=cv2.INTER_NEAREST) > 0
-    return parallax_field(flow_m, fit[0], region, threshold=threshold), fit[1]
+    return parallax_field(flow_m, fit[0], region, threshold=threshold), explained.ravel()
+
+
+def _reaching_border(mask: np.ndarray) -> np.ndarray:
+    """(rows, cols) bool: the 8-connected parts of ``mask`` that touch the grid's border."""
+    comp, _ = ndimage.label(mask, structure=np.ones((3, 3), bool))
+    edge = np.unique(np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]]))
+    return np.isin(comp, edge[edge > 0])
 
 
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
