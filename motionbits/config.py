@@ -183,7 +183,7 @@ class MotionBitsConfig:
     # ours: ... also when it explains them within relit_tolerance grey levels up to a local
     # brightness gain, the same on every colour channel (a moving shadow, a reflection,
     # a flicker; 0 = off)
-    relit_tolerance: float = 10.0
+    relit_tolerance: float = 6.0
     # ours (retirement.seen_again): where the static world is seen again -- the first frame
     # or the one before a MotionBit's birth matches the pixel within seen_tolerance grey
     # levels (5x5 mean) -- the pixel loses its evidence of motion (0 = off)

@@ -32,10 +32,12 @@ LOG_OFFSET = 8.0
 GAIN_SCALE = 4
 
 
-def pull_back(prev_gray: np.ndarray, flow_back: np.ndarray) -> np.ndarray:
+def pull_back(prev_gray: np.ndarray, flow_back: np.ndarray,
+              maps: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """(H, W) float32 previous grey frame sampled where the backward flow points:
-    ``out(p) = prev(p + F(p))`` (bilinear, border replicated)."""
-    map_x, map_y = sample_maps(flow_back)
+    ``out(p) = prev(p + F(p))`` (bilinear, border replicated); ``maps``:
+    ``motionbits.flow.sample_maps(flow_back)`` if already computed."""
+    map_x, map_y = sample_maps(flow_back) if maps is None else maps
     return cv2.remap(prev_gray, map_x, map_y, interpolation=cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_REPLICATE)
 

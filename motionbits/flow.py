@@ -127,7 +127,8 @@ def sample_maps(flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return xs + flow[..., 0], ys + flow[..., 1]
 
 
-def warp_nearest(values: np.ndarray, flow_back: np.ndarray, fill: int = 0) -> np.ndarray:
+def warp_nearest(values: np.ndarray, flow_back: np.ndarray, fill: int = 0,
+                 maps: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Carry a per-pixel map from the previous frame to the current one.
 
     Args:
@@ -135,19 +136,21 @@ def warp_nearest(values: np.ndarray, flow_back: np.ndarray, fill: int = 0) -> np
             that OpenCV remaps: int32, float32, uint8, uint16; C <= 4).
         flow_back: (H, W, 2) float32 flow from the current frame to the previous one.
         fill: value for pixels whose source lies outside the image.
+        maps: ``sample_maps(flow_back)`` if already computed.
 
     Returns:
         map of the same shape on the current frame, ``values[p + flow_back(p)]`` (nearest
         pixel).
     """
-    map_x, map_y = sample_maps(flow_back)
+    map_x, map_y = sample_maps(flow_back) if maps is None else maps
     return cv2.remap(
         values, map_x, map_y, interpolation=cv2.INTER_NEAREST,
         borderMode=cv2.BORDER_CONSTANT, borderValue=fill,
     )
 
 
-def forward_backward_error(flow_back: np.ndarray, flow_fwd: np.ndarray) -> np.ndarray:
+def forward_backward_error(flow_back: np.ndarray, flow_fwd: np.ndarray,
+                           maps: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Forward-backward inconsistency of the current frame's pixels, in pixels.
 
     For pixel p of the current frame, q = p + flow_back(p) lands in the previous frame and
@@ -157,11 +160,12 @@ def forward_backward_error(flow_back: np.ndarray, flow_fwd: np.ndarray) -> np.nd
     Args:
         flow_back: (H, W, 2) float32 flow current -> previous.
         flow_fwd: (H, W, 2) float32 flow previous -> current.
+        maps: ``sample_maps(flow_back)`` if already computed.
 
     Returns:
         (H, W) float32 error; pixels whose q leaves the image get +inf.
     """
-    map_x, map_y = sample_maps(flow_back)
+    map_x, map_y = sample_maps(flow_back) if maps is None else maps
     fwd_at_q = cv2.remap(
         flow_fwd, map_x, map_y, interpolation=cv2.INTER_LINEAR,
         borderMode=cv2.BORDER_CONSTANT, borderValue=(np.inf, np.inf),

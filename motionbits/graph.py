@@ -22,6 +22,16 @@ __all__ = ["inv_sym3", "twist_noise_covariance", "local_covariances", "twist_edg
 def inv_sym3(a: np.ndarray) -> np.ndarray:
     """Inverses of a batch of symmetric 3x3 matrices, (n, 3, 3) -> (n, 3, 3), by cofactors
     (one vectorised pass; LAPACK per 3x3 matrix costs more in call overhead than in work)."""
+    entries = _inv_sym3_entries(a)
+    out = np.empty_like(a, dtype=entries[0][0].dtype)
+    for i in range(3):
+        for j in range(3):
+            out[:, i, j] = entries[i][j]
+    return out
+
+
+def _inv_sym3_entries(a: np.ndarray) -> list[list[np.ndarray]]:
+    """:func:`inv_sym3` as a 3x3 nested list of (n,) arrays (entry [i][j] of every inverse)."""
     a00, a01, a02 = a[:, 0, 0], a[:, 0, 1], a[:, 0, 2]
     a11, a12, a22 = a[:, 1, 1], a[:, 1, 2], a[:, 2, 2]
     c00 = a11 * a22 - a12 * a12
@@ -31,12 +41,8 @@ def inv_sym3(a: np.ndarray) -> np.ndarray:
     c12 = a01 * a02 - a00 * a12
     c22 = a00 * a11 - a01 * a01
     det = a00 * c00 + a01 * c01 + a02 * c02
-    out = np.empty_like(a)
-    out[:, 0, 0], out[:, 1, 1], out[:, 2, 2] = c00, c11, c22
-    out[:, 0, 1] = out[:, 1, 0] = c01
-    out[:, 0, 2] = out[:, 2, 0] = c02
-    out[:, 1, 2] = out[:, 2, 1] = c12
-    return out / det[:, None, None]
+    i00, i01, i02, i11, i12, i22 = (c / det for c in (c00, c01, c02, c11, c12, c22))
+    return [[i00, i01, i02], [i01, i11, i12], [i02, i12, i22]]
 
 
 def twist_noise_covariance(points: np.ndarray, neighbors: np.ndarray, flow_noise: float
@@ -80,14 +86,25 @@ def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.n
     """
     idx = np.concatenate([np.arange(len(twists))[:, None], neighbors], axis=1).T  # (m, n)
     m = idx.shape[0]
+    if 2 <= m < 8:  # numpy sums fewer than 8 numbers in order: row by row, along the nodes
+        idx = np.ascontiguousarray(idx)
+
+        def total(v: np.ndarray) -> np.ndarray:
+            out = v[0] + v[1]
+            for row in v[2:]:
+                out += row
+            return out
+    else:
+        def total(v: np.ndarray) -> np.ndarray:
+            return v.sum(axis=0)
     vc = []  # per component, (m, n): the twists of N* about their mean
     for i in range(3):
         v = twists[:, i][idx]
-        vc.append(v - v.sum(axis=0) / m)
+        vc.append(v - total(v) / m)
     out = noise_cov.copy()
     for i in range(3):
         for j in range(i, 3):
-            sij = (vc[i] * vc[j]).sum(axis=0) / (m - 1)
+            sij = total(vc[i] * vc[j]) / (m - 1)
             out[:, i, j] += sij
             if i != j:
                 out[:, j, i] += sij
@@ -96,17 +113,19 @@ def local_covariances(twists: np.ndarray, neighbors: np.ndarray, noise_cov: np.n
 
 def twist_edge_weights(twists: np.ndarray, neighbors: np.ndarray, cov: np.ndarray) -> np.ndarray:
     """(n, k) weights exp(-0.5 * Mdist(i, j)^2) of the edges i -> neighbors[i, s]."""
-    diff = [twists[:, i][neighbors] - twists[:, i][:, None] for i in range(3)]  # (n, k) each
-    prec = inv_sym3(cov)  # (n, 3, 3)
-    d2 = np.zeros(neighbors.shape)
+    # computed as (k, n): every operation runs along the n nodes
+    nb = np.ascontiguousarray(neighbors.T)
+    diff = [twists[:, i][nb] - twists[:, i] for i in range(3)]  # (k, n) each
+    prec = _inv_sym3_entries(cov)  # [i][j]: (n,)
+    d2 = np.zeros(nb.shape)
     for i in range(3):
         for j in range(3):
-            term = diff[i] * prec[:, i, j][:, None]
+            term = diff[i] * prec[i][j]
             term *= diff[j]
             d2 += term
     np.maximum(d2, 0.0, out=d2)
     d2 *= -0.5
-    return np.exp(d2, out=d2)
+    return np.ascontiguousarray(np.exp(d2, out=d2).T)
 
 
 def project_past_max(past_max: np.ndarray, grid: NodeGrid, source: np.ndarray) -> np.ndarray:

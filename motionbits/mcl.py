@@ -51,7 +51,12 @@ def attractor_labels(m: np.ndarray) -> np.ndarray:
     Returns:
         (m,) int64 labels 0..K-1, numbered by first appearance.
     """
-    return _by_first_appearance(_functional_components(np.argmax(m, axis=0)))
+    return _attractors(np.argmax(m, axis=0))
+
+
+def _attractors(dest: np.ndarray) -> np.ndarray:
+    """:func:`attractor_labels` from the row ``dest`` (m,) holding most of each column."""
+    return _by_first_appearance(_functional_components(dest))
 
 
 def _functional_components(dest: np.ndarray) -> np.ndarray:
@@ -160,7 +165,8 @@ def _mcl_block(x, mult, expansion, inflation, threshold, max_iters, stable_iters
     inv_sums = 1.0 / np.where(col_sums > 0, col_sums, 1.0)
     m *= inv_sums
     tol = 1e-9 if np.dtype(dtype) == np.float64 else 1e-6
-    labels = attractor_labels(m)
+    dest = np.argmax(m, axis=0)
+    labels = _attractors(dest)
     same = 0
     it = 0
     for it in range(1, max_iters + 1):
@@ -189,12 +195,17 @@ def _mcl_block(x, mult, expansion, inflation, threshold, max_iters, stable_iters
             if np.abs(m - prev).max() <= tol:
                 break
         else:
-            new = attractor_labels(m)
-            same = same + 1 if np.array_equal(new, labels) else 0
-            labels = new
+            # the labels are a function of each column's argmax: unchanged argmax, same labels
+            new_dest = np.argmax(m, axis=0)
+            if np.array_equal(new_dest, dest):
+                same += 1
+            else:
+                new = _attractors(new_dest)
+                same = same + 1 if np.array_equal(new, labels) else 0
+                labels, dest = new, new_dest
             if same >= stable_iters:
                 break
-    return attractor_labels(m), it
+    return (attractor_labels(m) if stable_iters is None else labels), it
 
 
 def markov_cluster_coarse(

@@ -103,14 +103,20 @@ def sample_bilinear(field: np.ndarray, points: np.ndarray) -> np.ndarray:
     y = np.clip(points[:, 1].astype(np.float32), 0, h - 1)
     x0 = np.minimum(np.floor(x).astype(np.int64), w - 2) if w > 1 else np.zeros(x.shape, np.int64)
     y0 = np.minimum(np.floor(y).astype(np.int64), h - 2) if h > 1 else np.zeros(y.shape, np.int64)
-    fx = (x - x0)[:, None]
-    fy = (y - y0)[:, None]
+    fx, fy = x - x0, y - y0  # float64 (float32 - int64), and so is the interpolation
     x1 = np.minimum(x0 + 1, w - 1)
     y1 = np.minimum(y0 + 1, h - 1)
-    f = field.reshape(h, w, -1)
-    top = f[y0, x0] * (1 - fx) + f[y0, x1] * fx
-    bottom = f[y1, x0] * (1 - fx) + f[y1, x1] * fx
-    return (top * (1 - fy) + bottom * fy).astype(np.float32)
+    flat = np.ascontiguousarray(field).reshape(-1)
+    c = flat.size // (h * w)
+
+    def at(rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        # (C, n): channels first, so that every operation below runs along the n points
+        first = (rows * w + cols) * c
+        return np.stack([flat.take(first + k) for k in range(c)]).astype(np.float64)
+
+    top = at(y0, x0) * (1 - fx) + at(y0, x1) * fx
+    bottom = at(y1, x0) * (1 - fx) + at(y1, x1) * fx
+    return np.ascontiguousarray((top * (1 - fy) + bottom * fy).T, dtype=np.float32)
 
 
 def binary_fill_holes(mask: np.ndarray) -> np.ndarray:

@@ -41,6 +41,7 @@ MIN_GAIN, GAIN_OFFSET = 0.25, 8.0
 #: ... and only a gain this far from 1 (log) is a light change: near 1 the plain
 #: residual decides.
 MIN_LOG_GAIN = 0.14
+IDENTITY = np.eye(3)
 #: px: side of the square over which :func:`seen_again` averages residuals.
 SEEN_WINDOW = 5
 
@@ -70,6 +71,8 @@ class Origin:
 def _pull(frame: np.ndarray, motion: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
     """``frame`` (H, W) or (H, W, C) pulled back by the (3, 3) ``motion`` onto the image box
     ``box``: ``out(p) = frame(motion p)``, NaN where that falls outside ``frame``."""
+    if np.array_equal(motion, IDENTITY):  # a static camera's world: the box itself
+        return frame[box].astype(np.float32)  # (copy) what the bilinear warp gives
     to_frame = motion @ np.array(
         [[1.0, 0.0, box[1].start], [0.0, 1.0, box[0].start], [0.0, 0.0, 1.0]])
     size = (box[1].stop - box[1].start, box[0].stop - box[0].start)

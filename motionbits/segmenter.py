@@ -19,7 +19,8 @@ from motionbits.camera import compensate_camera
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
     appearance_consistent, gradient_magnitude, motion_gain, pull_back, static_residual)
-from motionbits.flow import FlowBackend, check_flow, forward_backward_error, make_flow
+from motionbits.flow import (FlowBackend, check_flow, forward_backward_error, make_flow,
+                             sample_maps)
 from motionbits.graph import (
     apply_temporal_constraints,
     local_covariances,
@@ -236,7 +237,8 @@ class MotionBitsSegmenter:
         with self._stage("carry"):
             # pixels whose backward target leaves the image come back inf or nan (remap
             # interpolates the inf border): treat both as "no reliable flow" (fmin: the cap)
-            fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd),
+            back_maps = sample_maps(flow_back)  # where each pixel came from, (h, w) x and y
+            fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd, back_maps),
                              np.float32(FB_ERROR_CAP))
             # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), self._prev_gray
@@ -244,7 +246,7 @@ class MotionBitsSegmenter:
             if self._first is None:
                 self._first = Origin(raw_prev_g, np.eye(3), np.eye(3),
                                      self._prev.astype(np.float32))
-            pulled = pull_back(prev_g, flow_back)
+            pulled = pull_back(prev_g, flow_back, back_maps)
             gradient = gradient_magnitude(cur_g)
             # a carried label holds a pixel only where the flow is consistent both ways and
             # its correspondence explains the pixel's appearance: uncovered background
@@ -253,7 +255,7 @@ class MotionBitsSegmenter:
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
             (prior, earned), history = self._temporal.carry([self._labels, self._earned],
-                                                            flow_back)
+                                                            flow_back, back_maps)
             earned = earned > 0
 
         with self._stage("twists"):

@@ -151,17 +151,23 @@ class SetDown:
         side = max(1, int(round(COMPACT_CELLS * max(cell))))
         kernel = np.ones((side, side), np.uint8)
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
+        # everything below happens on the box of the lost pixels (y0, x0: its corner)
+        rows, cols = np.flatnonzero(lost.any(axis=1)), np.flatnonzero(lost.any(axis=0))
+        y0, x0 = rows[0], cols[0]
+        lost_prior = np.where(lost[y0:rows[-1] + 1, x0:cols[-1] + 1],
+                              prior[y0:rows[-1] + 1, x0:cols[-1] + 1], 0)
+        lost_area = np.bincount(lost_prior.ravel())
         for lab, th, t in zip(ids, thetas, trans):
-            mask = (lost & (prior == lab)).astype(np.uint8)
-            if mask.sum() < min_area:
+            if lab >= len(lost_area) or lost_area[lab] < min_area:
                 continue
+            mask = (lost_prior == lab).astype(np.uint8)
             n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
             for k in range(1, n):
                 if stats[k, cv2.CC_STAT_AREA] < min_area:
                     continue
                 x, y, w, h = stats[k, :4]
-                box = slice(y, y + h), slice(x, x + w)
-                piece = comp[box] == k
+                piece = comp[y:y + h, x:x + w] == k
+                box = slice(y0 + y, y0 + y + h), slice(x0 + x, x0 + x + w)
                 opened = cv2.morphologyEx(piece.astype(np.uint8), cv2.MORPH_OPEN, kernel) > 0
                 if (opened.sum() < COMPACT_SHARE * piece.sum()
                         or earned[box][piece].mean() < EARNED_SHARE):

@@ -59,7 +59,8 @@ class TemporalState:
         """Index of the copy the constraints read (the one covering the most frames)."""
         return int(np.argmax(self.covered))
 
-    def carry(self, maps: list[np.ndarray], flow_back: np.ndarray
+    def carry(self, maps: list[np.ndarray], flow_back: np.ndarray,
+              flow_maps: tuple[np.ndarray, np.ndarray] | None = None
               ) -> tuple[list[np.ndarray], np.ndarray]:
         """Carry every history copy, and ``maps`` along with them, to the current frame.
 
@@ -67,6 +68,7 @@ class TemporalState:
             maps: (h, w) int32 maps of the previous frame to carry too (the label map...),
                 in the same remap calls.
             flow_back: (h, w, 2) flow from the current frame to the previous one.
+            flow_maps: ``motionbits.flow.sample_maps(flow_back)`` if already computed.
 
         Returns:
             (carried maps, history): ``maps`` carried, and the carried history the
@@ -75,7 +77,7 @@ class TemporalState:
         stack = [*maps, *self.histories]
         carried = []
         for start in range(0, len(stack), 4):  # OpenCV remaps at most 4 channels at once
-            chunk = warp_nearest(np.dstack(stack[start:start + 4]), flow_back)
+            chunk = warp_nearest(np.dstack(stack[start:start + 4]), flow_back, maps=flow_maps)
             carried.append(chunk.reshape(chunk.shape[:2] + (-1,)))
         carried = np.concatenate(carried, axis=2)
         m = len(maps)

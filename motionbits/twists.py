@@ -187,44 +187,46 @@ def _fit_neighbourhoods(points, back_points, idx, weights, inlier_threshold, dty
     """Backward rigid motion (angle (n',), trans (n', 2)) and inliers (n', m) of each row
     of point indices ``idx`` (n', m)."""
     n, m = idx.shape
-    p = points.astype(dtype)[idx]  # (n, m, 2)
-    q = back_points.astype(dtype)[idx]
-    w = weights.astype(dtype)[idx]  # (n, m)
+    # points as (m, n), hypotheses as (P, n), residuals as (P, m, n): every operation runs
+    # along the n' neighbourhoods (numpy is slow over many short rows)
+    nodes = np.ascontiguousarray(idx.T)
+    px, py = (points[:, i].astype(dtype)[nodes] for i in range(2))
+    qx, qy = (back_points[:, i].astype(dtype)[nodes] for i in range(2))
+    w = weights.astype(dtype)[nodes]
 
     # every 2-point hypothesis: its rotation from the segment directions and its
     # translation from the segment midpoints, written out per coordinate (small batched
     # matrix products are slow in numpy)
     pairs = np.array(list(combinations(range(m), 2)))  # (P, 2)
-    px, py, qx, qy = p[..., 0], p[..., 1], q[..., 0], q[..., 1]  # (n, m) each
     a, b = pairs[:, 0], pairs[:, 1]
-    dpx, dpy = px[:, b] - px[:, a], py[:, b] - py[:, a]  # (n, P)
-    dqx, dqy = qx[:, b] - qx[:, a], qy[:, b] - qy[:, a]
+    dpx, dpy = px[b] - px[a], py[b] - py[a]  # (P, n)
+    dqx, dqy = qx[b] - qx[a], qy[b] - qy[a]
     theta = np.arctan2(dpx * dqy - dpy * dqx, dpx * dqx + dpy * dqy)
-    c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]  # (n, P, 1)
-    mpx, mpy = 0.5 * (px[:, a] + px[:, b]), 0.5 * (py[:, a] + py[:, b])
-    tx = 0.5 * (qx[:, a] + qx[:, b]) - (c[..., 0] * mpx - s[..., 0] * mpy)
-    ty = 0.5 * (qy[:, a] + qy[:, b]) - (s[..., 0] * mpx + c[..., 0] * mpy)
-    pxe, pye = px[:, None, :], py[:, None, :]  # (n, 1, m)
-    # residuals rx = c px - s py + tx - qx, ry = s px + c py + ty - qy, (n, P, m), computed
+    c, s = np.cos(theta), np.sin(theta)
+    mpx, mpy = 0.5 * (px[a] + px[b]), 0.5 * (py[a] + py[b])
+    tx = 0.5 * (qx[a] + qx[b]) - (c * mpx - s * mpy)
+    ty = 0.5 * (qy[a] + qy[b]) - (s * mpx + c * mpy)
+    c, s = c[:, None], s[:, None]  # (P, 1, n)
+    # residuals rx = c px - s py + tx - qx, ry = s px + c py + ty - qy, (P, m, n), computed
     # in place (the same operations in the same order: fewer large temporaries)
-    rx, tmp = c * pxe, s * pye
+    rx, tmp = c * px, s * py
     rx -= tmp
-    rx += tx[..., None]
-    rx -= qx[:, None, :]
-    ry = s * pxe
-    np.multiply(c, pye, out=tmp)
+    rx += tx[:, None]
+    rx -= qx
+    ry = s * px
+    np.multiply(c, py, out=tmp)
     ry += tmp
-    ry += ty[..., None]
-    ry -= qy[:, None, :]
+    ry += ty[:, None]
+    ry -= qy
     r2 = rx * rx
     r2 += np.multiply(ry, ry, out=ry)
     tau2 = inlier_threshold**2
     # MSAC cost: inliers pay their squared residual, outliers a constant
     capped = np.minimum(r2, tau2, out=rx)
-    capped *= w[:, None, :]
-    cost = _sum_last(capped) + 1e-9 * np.arange(len(pairs))
-    best = np.argmin(cost, axis=1)
-    inliers = r2[np.arange(n), best] < tau2  # (n, m)
+    capped *= w
+    cost = _sum_last(np.moveaxis(capped, 1, -1)) + 1e-9 * np.arange(len(pairs))[:, None]
+    best = np.argmin(cost, axis=0)
+    inliers = r2[best, :, np.arange(n)] < tau2  # (n, m)
     fit_w = weights.astype(np.float64)[idx] * inliers
     # a neighbourhood without any weighted inlier falls back to all points, unweighted
     none = fit_w.sum(1) <= 0

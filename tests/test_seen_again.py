@@ -45,7 +45,7 @@ def test_relit_residual_explains_a_shadow_not_a_body_of_another_colour():
     assert np.isnan(relit_residual(base, np.eye(3), base, BOX, inside))
 
 
-@pytest.mark.parametrize("relit, shadow_stays", [(10.0, False), (0.0, True)])
+@pytest.mark.parametrize("relit, shadow_stays", [(6.0, False), (0.0, True)])
 def test_a_shadow_is_retired_and_a_moving_body_is_kept(relit, shadow_stays):
     """MotionBit 1 is a shadow that moved with an arm (its own motion: 10 px), MotionBit 2
     a textured body that moved 10 px. Only the light-change test retires the shadow; the
