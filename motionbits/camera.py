@@ -13,24 +13,62 @@ H^-1 o B, relative to the camera-compensated frame. Where H is close to a rigid 
 (in-plane shake) that is rigid again; under a strong perspective change it is only
 approximately rigid -- the same approximation the static-camera model makes for bodies
 moving in depth. A camera that translates through a 3D scene sees parallax, which no
-homography removes (known limit: the moving-camera generated track).
+homography removes by itself: where the homography's residual lines up with one epipole
+over enough of the image, that residual is the static world's parallax
+(``motionbits/parallax.py``, plane + parallax) and is removed as well.
 
 A static camera fits H ~ identity; below ``min_shift`` nothing is changed at all.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import cv2
 import numpy as np
+from scipy import ndimage
 
 from motionbits.flow import pixel_grid, sample_maps
 from motionbits.nodes import sample_bilinear
+from motionbits.parallax import fit_epipole, parallax_field
 
-__all__ = ["fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera"]
+__all__ = ["dominant_homography", "fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera",
+           "fit_parallax"]
 
 #: A node's flow is trusted for the camera fit above this forward-backward reliability
 #: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
 RELIABLE = 0.5
+
+
+def dominant_homography(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray,
+                        *, threshold: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The 3x3 homography H (current -> previous, ``q ~ H p``) most nodes follow (RANSAC).
+
+    Args:
+        points, back_points: (n, 2) node positions p and their backward-flow targets q.
+        reliable: (n,) bool, nodes whose flow is trustworthy (only they vote).
+        threshold: px, RANSAC reprojection threshold.
+
+    Returns:
+        (H, inliers): H and the (n,) bool reliable nodes it explains; None with fewer than
+        8 reliable nodes or no fit.
+    """
+    p = points[reliable].astype(np.float32)
+    q = back_points[reliable].astype(np.float32)
+    if len(p) < 8:
+        return None
+    h, inl = cv2.findHomography(p, q, cv2.RANSAC, threshold, maxIters=500)
+    if h is None or inl is None:
+        return None
+    inliers = np.zeros(len(points), bool)
+    inliers[reliable] = inl.ravel() > 0
+    return h, inliers
+
+
+def _shift(points: np.ndarray, h: np.ndarray) -> float:
+    """Median px displacement of the points under h."""
+    moved = cv2.perspectiveTransform(points[None].astype(np.float64), h)[0]
+    return float(np.median(np.linalg.norm(moved - points, axis=1)))
 
 
 def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray, *,
@@ -44,17 +82,12 @@ def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.
         threshold: px, RANSAC reprojection threshold.
         min_shift: px; H is returned only if it moves the nodes by more than this (median).
     """
-    p = points[reliable].astype(np.float32)
-    q = back_points[reliable].astype(np.float32)
-    if len(p) < max(8, support * len(points) * 0.5):
+    if reliable.sum() < support * len(points) * 0.5:
         return None
-    h, inl = cv2.findHomography(p, q, cv2.RANSAC, threshold, maxIters=500)
-    if h is None or inl is None or inl.mean() < support:
+    fit = dominant_homography(points, back_points, reliable, threshold=threshold)
+    if fit is None or fit[1][reliable].mean() < support or _shift(points, fit[0]) <= min_shift:
         return None
-    moved = cv2.perspectiveTransform(points[None].astype(np.float64), h)[0]
-    if np.median(np.linalg.norm(moved - points, axis=1)) <= min_shift:
-        return None
-    return h
+    return fit[0]
 
 
 def compensate_flow(flow_back: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -66,16 +99,86 @@ def compensate_flow(flow_back: np.ndarray, h: np.ndarray) -> np.ndarray:
     return np.stack([back[..., 0] - xs, back[..., 1] - ys], -1)
 
 
-def stabilize_previous(prev: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """The previous frame in the current frame's coordinates: ``out(p) = prev(H p)``."""
-    ht, wd = prev.shape[:2]
-    return cv2.warpPerspective(prev, h, (wd, ht), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                               borderMode=cv2.BORDER_REPLICATE)
+def world_maps(h: np.ndarray, shape: tuple[int, int],
+               parallax: np.ndarray | None = None) -> np.ndarray:
+    """(H, W, 2) float32: where each pixel p of a static world was in the previous frame,
+    ``H (p + P(p))`` (``parallax`` P: optional (H, W, 2) float32, :func:`fit_parallax`)."""
+    ht, wd = shape
+    xs, ys = pixel_grid(ht, wd)
+    src = np.stack([xs, ys], -1) if parallax is None else np.stack(
+        [xs + parallax[..., 0], ys + parallax[..., 1]], -1)
+    return cv2.perspectiveTransform(src.reshape(1, -1, 2).astype(np.float32),
+                                    h)[0].reshape(ht, wd, 2)
+
+
+def stabilize_previous(prev: np.ndarray, h: np.ndarray,
+                       parallax: np.ndarray | None = None) -> np.ndarray:
+    """The previous frame in the current frame's coordinates: ``out(p) = prev(H (p + P(p)))``.
+
+    ``parallax`` P: optional (H, W, 2) float32 static-world parallax (:func:`fit_parallax`).
+    """
+    maps = world_maps(h, prev.shape[:2], parallax)
+    return cv2.remap(prev, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
+                 flow_m: np.ndarray, grid_shape: tuple[int, int], *, support: float,
+                 threshold: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The static world's parallax left by the homography, where there is some.
+
+    Parallax is looked for only in regions of clear residual (above ``threshold``) that
+    reach the image's border: the static world surrounds the view (floor, walls, the
+    background beyond the homography's plane), while a body seen whole -- a car the
+    camera follows, a pushed block -- is bounded by static pixels, and its motion can
+    line up with an epipole as well as parallax can.
+
+    Args:
+        points, residual: (n, 2) node positions (a row-major ``grid_shape`` grid) and their
+            motion relative to the homography.
+        reliable: (n,) bool, nodes whose flow is trustworthy.
+        flow_m: (H, W, 2) backward flow relative to the homography.
+        grid_shape: (rows, cols) of the node grid.
+        support: the epipole must explain the residual of at least this fraction of the
+            reliable nodes (1.0 = off).
+        threshold: px, as the homography's RANSAC threshold.
+
+    Returns:
+        (field, explained): the (H, W, 2) float32 parallax and the (n,) bool nodes whose
+        residual it explains; None where no parallax is found.
+    """
+    if support >= 1.0:
+        return None
+    clear = (reliable & (np.linalg.norm(residual, axis=1) > threshold)).reshape(grid_shape)
+    world = _reaching_border(clear)
+    if world.sum() < support * reliable.sum():
+        return None
+    fit = fit_epipole(points, residual, world.ravel(), threshold=threshold)
+    if fit is None:
+        return None
+    # ... and the nodes that fit the epipole must reach the border themselves (an arm
+    # that enters the view joins what it carries to the border, but does not fit e)
+    explained = _reaching_border(fit[1].reshape(grid_shape))
+    if explained.sum() < max(8, support * reliable.sum()):
+        return None
+    h, w = flow_m.shape[:2]
+    region = cv2.resize(explained.astype(np.uint8), (w, h),
+                        interpolation=cv2.INTER_NEAREST) > 0
+    return parallax_field(flow_m, fit[0], region, threshold=threshold), explained.ravel()
+
+
+def _reaching_border(mask: np.ndarray) -> np.ndarray:
+    """(rows, cols) bool: the 8-connected parts of ``mask`` that touch the grid's border."""
+    comp, _ = ndimage.label(mask, structure=np.ones((3, 3), bool))
+    edge = np.unique(np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]]))
+    return np.isin(comp, edge[edge > 0])
 
 
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
                       flow_back: np.ndarray, prev: np.ndarray, *, support: float,
-                      threshold: float, min_shift: float
+                      threshold: float, min_shift: float, parallax: float = 1.0,
+                      grid_shape: tuple[int, int] | None = None,
+                      reflow: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                      cur: np.ndarray | None = None
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """Motion measured against the dominant (camera) motion, where there is one.
 
@@ -85,21 +188,65 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
             nodes above ``RELIABLE`` fit the camera.
         flow_back: (H, W, 2) float32 backward flow (current -> previous).
         prev: (H, W, 3) uint8 previous frame.
-        support, threshold, min_shift: as in :func:`fit_camera_motion`; ``support`` 1.0
-            turns compensation off.
+        support, threshold, min_shift: as in :func:`fit_camera_motion`, except that
+            ``support`` counts the nodes the homography *or* the parallax explains;
+            ``support`` 1.0 turns compensation off.
+        parallax: ``support`` of :func:`fit_parallax` (1.0, the default here: homography
+            only).
+        grid_shape: (rows, cols) of the node grid (``points`` row-major); needed for
+            parallax.
+        reflow, cur: a flow backend ``flow(a, b) -> (H, W, 2)`` and the (H, W, 3) uint8
+            current frame: the motion the homography leaves is then measured again, as the
+            flow from ``cur`` to the previous frame warped by the homography (small
+            displacements, which a coarse-to-fine flow such as DIS measures better than the
+            camera's large ones); None: ``flow_back`` composed with the homography.
 
     Returns:
         (flow_m, prev_m, back_m, cam): the backward flow (H, W, 2), the previous frame and
-        the nodes' backward targets (n, 2) relative to the camera, and the camera's 3x3
-        homography -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects)
+        the nodes' backward targets (n, 2) relative to the static world (homography and
+        parallax; 0 flow where the view just entered), and the camera's 3x3 homography -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects)
         when no camera motion is found.
     """
     if support >= 1.0:
         return flow_back, prev, back_points, None
-    cam = fit_camera_motion(points, back_points, reliability > RELIABLE, support=support,
-                            threshold=threshold, min_shift=min_shift)
-    if cam is None:
+    reliable = reliability > RELIABLE
+    if reliable.sum() < support * len(points) * 0.5:
         return flow_back, prev, back_points, None
-    flow_m = compensate_flow(flow_back, cam)
-    return (flow_m, stabilize_previous(prev, cam), points + sample_bilinear(flow_m, points),
-            cam)
+    fit = dominant_homography(points, back_points, reliable, threshold=threshold)
+    if fit is None or _shift(points, fit[0]) <= min_shift:
+        return flow_back, prev, back_points, None
+    cam, explained = fit
+    if reflow is None or cur is None:
+        flow_m = compensate_flow(flow_back, cam)
+    else:
+        flow_m = np.array(reflow(cur, stabilize_previous(prev, cam)), np.float32)  # a copy
+        # the second flow's small displacements also correct the homography (the first
+        # flow's are biased where texture runs one way: wood grain, stripes)
+        fix = dominant_homography(points, points + sample_bilinear(flow_m, points), reliable,
+                                  threshold=threshold)
+        if fix is not None:
+            cam = cam @ fix[0]
+            cam /= cam[2, 2]
+            explained = fix[1]
+            flow_m = compensate_flow(flow_m, fix[0])
+    back_m = points + sample_bilinear(flow_m, points)
+    par = None if grid_shape is None else fit_parallax(
+        points, back_m - points, reliable, flow_m, grid_shape, support=parallax,
+        threshold=threshold)
+    if par is not None:
+        explained = explained | par[1]
+    # the static world's model (the homography and its parallax) must explain enough nodes
+    if explained[reliable].mean() < support:
+        return flow_back, prev, back_points, None
+    par_field = None if par is None else par[0]
+    maps = world_maps(cam, flow_m.shape[:2], par_field)
+    prev_m = cv2.remap(prev, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    if par_field is not None:
+        flow_m = flow_m - par_field
+    # what has just come into view (its static-world source lies outside the previous
+    # frame) has no measurable motion: its flow is extrapolated, not observed
+    ht, wd = flow_m.shape[:2]
+    entered = ((maps[..., 0] < 0) | (maps[..., 0] > wd - 1) | (maps[..., 1] < 0)
+               | (maps[..., 1] > ht - 1))
+    flow_m[entered] = 0.0
+    return flow_m, prev_m, points + sample_bilinear(flow_m, points), cam

@@ -49,6 +49,7 @@ _RANGES = {
     "camera_support": "(0, 1]",
     "camera_threshold": "(0, inf)",
     "camera_min_shift": "[0, inf)",
+    "camera_parallax": "(0, 1]",
     "min_cluster_nodes": "[1, inf)",
     "prior_bonus": "[0, inf)",
     "photo_weight": "[0, inf)",
@@ -139,6 +140,15 @@ class MotionBitsConfig:
     camera_support: float = 0.5
     camera_threshold: float = 1.0  # px: ... with this RANSAC inlier threshold ...
     camera_min_shift: float = 0.25  # px: ... and only if it moves the nodes more (median)
+    # ours (motionbits/parallax.py): what the homography leaves is the static world's
+    # parallax where one epipole explains the residual (above camera_threshold) of at least
+    # this fraction of the reliable nodes; it is removed too (1.0 = homography only)
+    camera_parallax: float = 0.1
+    # ours: the motion the homography leaves is measured by a second flow, from the frame
+    # to the previous frame warped by the homography (small displacements, which DIS
+    # measures better than the camera's); False = the first flow composed with H (exact
+    # flows, e.g. the oracle baseline, need no second pass)
+    camera_reflow: bool = True
 
     # --- pixel masks and identities (ours) ---
     min_cluster_nodes: int = 4  # clusters with fewer nodes are noise

@@ -269,7 +269,9 @@ class MotionBitsSegmenter:
             # label maps are still carried with the true flow
             flow_m, prev_m, back_pts, cam = compensate_camera(
                 pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
-                threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift)
+                threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
+                parallax=cfg.camera_parallax, grid_shape=(grid.rows, grid.cols),
+                reflow=self.flow if cfg.camera_reflow else None, cur=cur)
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
                 dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(

@@ -114,8 +114,9 @@ class OracleFlowMotionBits:
         config = self.config or motionbits.MotionBitsConfig()
         if isinstance(config, dict):
             config = motionbits.MotionBitsConfig(**config)
-        if self.changes:
-            config = config.with_(**self.changes)
+        # the stored flow is exact between the clip's frames only: no second flow pass on
+        # camera-stabilised frames
+        config = config.with_(**{"camera_reflow": False, **self.changes})
         flow = StoredFlow(scene, frames)
         load_flow_pair(scene, 1)  # fail early, with the reason, if the scene has no flow
         seg = motionbits.MotionBitsSegmenter(config, flow=flow)

@@ -1,0 +1,141 @@
+"""Plane + parallax: the static world's motion that a camera homography leaves (ours).
+
+A camera that translates through a 3D scene moves each static point by the homography H
+of one plane plus a *parallax* residual that points along the line through the point and
+the epipole e (the image of the other camera centre), with a magnitude that grows with
+the point's distance from the plane (Irani & Anandan, "Parallax geometry of pairs of
+points", 1996). After the homography is removed (``camera.compensate_flow``) the static
+world's residual r(p) therefore satisfies ``r(p) x (p - e) = 0`` for one e shared by the
+whole image; an independently moving body breaks that (a body moving exactly along its
+epipolar lines is the model's blind spot).
+
+:func:`fit_epipole` finds e by RANSAC over node pairs (two residual lines meet at e; e may
+lie at infinity, so it is homogeneous); :func:`parallax_field` turns it into a dense (H, W, 2)
+field: the along-line residual where a pixel's residual lies on its epipolar line and
+exceeds the threshold, a smooth interpolation of it elsewhere (so a slow or misaligned
+body is measured against its surroundings' parallax, not erased).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motionbits.flow import pixel_grid
+
+__all__ = ["epipolar_distance", "fit_epipole", "parallax_field"]
+
+#: RANSAC hypotheses (node pairs) tried for the epipole; fixed seed, so runs repeat.
+EPIPOLE_ITERS = 200
+#: Gaussian sigma of the interpolated parallax, in multiples of the image's longer side.
+SMOOTH_FRACTION = 0.03
+
+
+def _homogeneous(p: np.ndarray) -> np.ndarray:
+    return np.concatenate([p, np.ones(p.shape[:-1] + (1,), p.dtype)], -1)
+
+
+def epipolar_distance(points: np.ndarray, residual: np.ndarray, e: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """How far each residual leaves its epipolar line, and the unit line direction.
+
+    Args:
+        points: (..., 2) float positions p.
+        residual: (..., 2) float residual motion r at p.
+        e: (3,) homogeneous epipole, or (3, ...) several, broadcast against the points.
+
+    Returns:
+        (dist, u): (...) px distance of ``p + r`` from the line through p and e, and
+        (..., 2) the line's unit direction at p (0 where p is the epipole).
+    """
+    e = np.asarray(e, np.float64)
+    # the line p x e through p = (x, y, 1) and e: (y e_w - e_y, e_x - x e_w, ...)
+    lx = points[..., 1] * e[2] - e[1]
+    ly = e[0] - points[..., 0] * e[2]
+    norm = np.hypot(lx, ly)
+    safe = np.where(norm > 1e-12, norm, 1.0)
+    dist = np.abs(lx * residual[..., 0] + ly * residual[..., 1]) / safe
+    u = np.stack([ly, -lx], -1) / safe[..., None]
+    return dist, np.where((norm > 1e-12)[..., None], u, 0.0)
+
+
+def fit_epipole(points: np.ndarray, residual: np.ndarray, candidates: np.ndarray, *,
+                threshold: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The epipole that the most residuals point along, by RANSAC over pairs of nodes.
+
+    Args:
+        points: (n, 2) node positions.
+        residual: (n, 2) their motion left by the camera homography.
+        candidates: (n,) bool, nodes with a clear residual (above ``threshold``) and
+            reliable flow: they vote.
+        threshold: px, a residual within this distance of its epipolar line fits e.
+
+    Returns:
+        (e, inliers): the (3,) homogeneous epipole, refined by least squares on its
+        inliers, and the (n,) bool candidates it explains; None with fewer than 8
+        candidates.
+    """
+    idx = np.flatnonzero(candidates)
+    if len(idx) < 8:
+        return None
+    p = points[idx].astype(np.float64)
+    lines = np.cross(_homogeneous(p), _homogeneous(p + residual[idx]))
+    lines /= np.hypot(lines[:, 0], lines[:, 1])[:, None] + 1e-12
+    rng = np.random.default_rng(0)
+    pairs = rng.integers(0, len(idx), size=(EPIPOLE_ITERS, 2))
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    hyp = np.cross(lines[pairs[:, 0]], lines[pairs[:, 1]])
+    hyp = hyp[np.linalg.norm(hyp, axis=1) > 1e-12]
+    if not len(hyp):
+        return None
+    # all hypotheses scored at once: (hypotheses, candidates)
+    dists = epipolar_distance(p[None], residual[idx][None], hyp.T[:, :, None])[0]
+    # MSAC: truncated squared distances, so that the most precise of the hypotheses with
+    # many inliers wins
+    best = hyp[np.argmin((np.minimum(dists, threshold) ** 2).sum(1))]
+    inl = epipolar_distance(p, residual[idx], best)[0] < threshold
+    # least squares on the inliers, each residual line weighted so that its term is the
+    # residual's px distance from its epipolar line (one reweighting step from ``best``)
+    hp = _homogeneous(p[inl])
+    e0 = best / np.linalg.norm(best)
+    across = np.linalg.norm(np.cross(hp, e0)[:, :2], axis=1)
+    weight = np.linalg.norm(residual[idx][inl], axis=1) / np.maximum(across, 1e-9)
+    e = np.linalg.svd(lines[inl] * weight[:, None], full_matrices=False)[2][-1]
+    cost = lambda x: np.minimum(epipolar_distance(p, residual[idx], x)[0], threshold) ** 2
+    if cost(e).sum() <= cost(best).sum():
+        best = e
+    out = np.zeros(len(points), bool)
+    out[idx] = epipolar_distance(p, residual[idx], best)[0] < threshold
+    return best, out
+
+
+def parallax_field(residual: np.ndarray, e: np.ndarray, region: np.ndarray, *,
+                   threshold: float) -> np.ndarray:
+    """(H, W, 2) float32 parallax of the static world at every pixel.
+
+    Args:
+        residual: (H, W, 2) float32 motion left by the camera homography (backward).
+        e: (3,) homogeneous epipole (:func:`fit_epipole`).
+        region: (H, W) bool, where the static world's parallax was found.
+        threshold: px; a pixel of ``region`` whose residual exceeds this and lies within it of its
+            epipolar line keeps its own along-line residual, the others get the smooth
+            interpolation of those pixels' parallax (Gaussian, ``SMOOTH_FRACTION`` of the
+            longer side).
+    """
+    h, w = residual.shape[:2]
+    xs, ys = pixel_grid(h, w)
+    dist, u = epipolar_distance(np.stack([xs, ys], -1), residual, e)
+    along = (residual[..., 0] * u[..., 0] + residual[..., 1] * u[..., 1])
+    fits = region & (dist < threshold) & (np.abs(along) > threshold)
+    own = (along[..., None] * u).astype(np.float32)
+    # normalised convolution of the fitting pixels' parallax, at 1/4 size for speed
+    small = (max(1, w // 4), max(1, h // 4))
+    sigma = SMOOTH_FRACTION * max(h, w) / 4
+    weight = cv2.GaussianBlur(cv2.resize(fits.astype(np.float32), small,
+                                         interpolation=cv2.INTER_AREA), (0, 0), sigma)
+    num = cv2.GaussianBlur(cv2.resize(np.where(fits[..., None], own, 0).astype(np.float32),
+                                      small, interpolation=cv2.INTER_AREA), (0, 0), sigma)
+    smooth = cv2.resize(num / np.maximum(weight, 1e-3)[..., None], (w, h),
+                        interpolation=cv2.INTER_LINEAR)
+    smooth *= cv2.resize(np.minimum(weight / 0.05, 1.0), (w, h))[..., None]  # no support: 0
+    return np.where(fits[..., None], own, smooth).astype(np.float32)

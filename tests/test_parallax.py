@@ -1,0 +1,88 @@
+"""Plane + parallax (motionbits/parallax.py, camera.compensate_camera): a translating camera."""
+
+import numpy as np
+
+from motionbits.camera import compensate_camera
+from motionbits.nodes import NodeGrid
+from motionbits.parallax import epipolar_distance, fit_epipole, parallax_field
+
+H, W = 120, 160
+E = np.array([70.0, 50.0])  # the epipole (image of the other camera centre)
+SHIFT = np.array([3.0, 1.0])  # the plane's homography: a shift
+
+
+def _world(gamma_band: float, body_motion: np.ndarray):
+    """Backward flow of a scene seen by a translating camera: a plane (the lower 3/4,
+    moved by SHIFT), a background band along the top edge off the plane (parallax
+    ``gamma_band * (p - E)``), and a 20x20 body in the plane's middle moving by
+    ``body_motion`` on top of SHIFT."""
+    ys, xs = np.mgrid[0:H, 0:W].astype(np.float32)
+    p = np.stack([xs, ys], -1)
+    flow = np.broadcast_to(SHIFT.astype(np.float32), (H, W, 2)).copy()
+    band = ys < 30
+    flow[band] += gamma_band * (p[band] - E)
+    body = (ys >= 70) & (ys < 90) & (xs >= 70) & (xs < 90)
+    flow[body] += body_motion.astype(np.float32)
+    return flow, band, body
+
+
+def _compensate(flow, parallax):
+    grid = NodeGrid.build(H, W, 24, 5)
+    pts = grid.points
+    ix = np.clip(np.round(pts).astype(int), 0, [W - 1, H - 1])
+    back = pts + flow[ix[:, 1], ix[:, 0]]
+    prev = np.random.default_rng(0).integers(0, 255, (H, W, 3), dtype=np.uint8)
+    return compensate_camera(pts, back, np.ones(grid.n), flow, prev, support=0.5,
+                             threshold=1.0, min_shift=0.25, parallax=parallax,
+                             grid_shape=(grid.rows, grid.cols))
+
+
+def test_fit_epipole_finds_the_shared_point_and_leaves_a_moving_body_out():
+    rng = np.random.default_rng(1)
+    p = rng.uniform([0, 0], [W, H], (300, 2))
+    gamma = rng.uniform(0.02, 0.08, 300)
+    r = gamma[:, None] * (p - E)
+    r[:40] = rng.normal(0, 3, (40, 2))  # an independently moving body: any direction
+    cand = np.linalg.norm(r, axis=1) > 1.0
+    e, inliers = fit_epipole(p, r, cand, threshold=0.5)
+    assert np.allclose(e[:2] / e[2], E, atol=1.0)
+    assert inliers[40:][cand[40:]].all()
+    assert inliers[:40].mean() < 0.3  # only those that happen to point at E
+    d, u = epipolar_distance(p[40:], r[40:], e)
+    assert d.max() < 0.25 and np.allclose(np.abs((u * r[40:]).sum(1)),
+                                           np.linalg.norm(r[40:], axis=1), atol=0.01)
+
+
+def test_parallax_field_keeps_aligned_residual_and_interpolates_the_rest():
+    flow, band, body = _world(0.06, np.array([0.0, 0.0]))
+    residual = flow - SHIFT.astype(np.float32)
+    residual[body] = [4.0, 0.0]  # not along its epipolar line: not parallax
+    field = parallax_field(residual, np.array([*E, 1.0]), band | body, threshold=1.0)
+    big = band & (np.linalg.norm(residual, axis=-1) > 1.5)
+    assert np.abs(field[big] - residual[big]).max() < 1e-3
+    assert np.abs(field[body]).max() < 0.5  # the plane around it has no parallax
+
+
+def test_compensation_removes_the_background_parallax_but_not_the_moving_body():
+    flow, band, body = _world(0.06, np.array([0.0, 4.0]))
+    off = _compensate(flow, parallax=1.0)[0]  # homography only
+    on, _, _, cam = _compensate(flow, parallax=0.1)
+    assert cam is not None
+    inner = band.copy()
+    inner[:, :6] = inner[:, -6:] = inner[:4] = False  # away from the edges
+    assert np.median(np.linalg.norm(off[inner], axis=-1)) > 2.0
+    assert np.median(np.linalg.norm(on[inner], axis=-1)) < 0.3
+    assert np.allclose(np.median(on[body], axis=0), [0.0, 4.0], atol=0.3)
+    plane = ~band & ~body
+    plane[:, -6:] = plane[-6:] = False  # what just came into view is set to 0 anyway
+    assert np.median(np.linalg.norm(on[plane], axis=-1)) < 0.1
+
+
+def test_a_body_moving_along_its_epipolar_line_is_not_taken_for_parallax():
+    # no parallax anywhere (the camera only pans), one body moving radially from E: the
+    # car the camera follows; it lines up with an epipole, but it is bounded by the plane
+    centre = np.array([80.0, 80.0])
+    radial = 5.0 * (centre - E) / np.linalg.norm(centre - E)
+    flow, _, body = _world(0.0, radial)
+    on = _compensate(flow, parallax=0.1)[0]
+    assert np.allclose(np.median(on[body], axis=0), radial, atol=0.3)
