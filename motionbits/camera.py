@@ -4,8 +4,8 @@ A handheld, panning or shaking camera moves every pixel, so the whole image look
 moves. When one homography explains the flow of most nodes (RANSAC), that motion is taken
 as the camera's and removed -- a homography is exact for a camera that rotates (pans,
 tilts, shakes) and for a planar scene; a similarity is not (on the DAVIS car-roundabout
-pan, a similarity left 35% of the static background labelled, a homography 7%): the previous frame is re-expressed in the current frame's
-coordinates (``prev_stab(p) = prev(H p)``) and the backward flow becomes
+pan, a similarity left 35% of the static background labelled, a homography 7%): the
+previous frame is re-expressed in the current frame's coordinates (``prev_stab(p) = prev(H p)``) and the backward flow becomes
 ``H^-1(p + F(p)) - p``, which is 0 on the background.
 
 What this does to twists: a body's image motion B (current -> previous) becomes
@@ -32,8 +32,8 @@ from motionbits.flow import pixel_grid, sample_maps
 from motionbits.nodes import sample_bilinear
 from motionbits.parallax import fit_epipole, parallax_field
 
-__all__ = ["dominant_homography", "fit_camera_motion", "compensate_flow", "stabilize_previous", "compensate_camera",
-           "fit_parallax"]
+__all__ = ["dominant_homography", "compensate_flow", "world_maps", "stabilize_previous",
+           "fit_parallax", "compensate_camera"]
 
 #: A node's flow is trusted for the camera fit above this forward-backward reliability
 #: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
@@ -71,25 +71,6 @@ def _shift(points: np.ndarray, h: np.ndarray) -> float:
     return float(np.median(np.linalg.norm(moved - points, axis=1)))
 
 
-def fit_camera_motion(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray, *,
-                      support: float, threshold: float, min_shift: float) -> np.ndarray | None:
-    """The 3x3 homography H (current -> previous, ``q ~ H p``) of the dominant motion, or None.
-
-    Args:
-        points, back_points: (n, 2) node positions p and their backward-flow targets q.
-        reliable: (n,) bool, nodes whose flow is trustworthy.
-        support: fraction of all reliable nodes that must be RANSAC inliers of H.
-        threshold: px, RANSAC reprojection threshold.
-        min_shift: px; H is returned only if it moves the nodes by more than this (median).
-    """
-    if reliable.sum() < support * len(points) * 0.5:
-        return None
-    fit = dominant_homography(points, back_points, reliable, threshold=threshold)
-    if fit is None or fit[1][reliable].mean() < support or _shift(points, fit[0]) <= min_shift:
-        return None
-    return fit[0]
-
-
 def compensate_flow(flow_back: np.ndarray, h: np.ndarray) -> np.ndarray:
     """(H, W, 2) backward flow relative to the camera: ``H^-1(p + F(p)) - p``."""
     ht, wd = flow_back.shape[:2]
@@ -111,13 +92,15 @@ def world_maps(h: np.ndarray, shape: tuple[int, int],
                                     h)[0].reshape(ht, wd, 2)
 
 
-def stabilize_previous(prev: np.ndarray, h: np.ndarray,
-                       parallax: np.ndarray | None = None) -> np.ndarray:
+def stabilize_previous(prev: np.ndarray, h: np.ndarray, parallax: np.ndarray | None = None,
+                       maps: np.ndarray | None = None) -> np.ndarray:
     """The previous frame in the current frame's coordinates: ``out(p) = prev(H (p + P(p)))``.
 
-    ``parallax`` P: optional (H, W, 2) float32 static-world parallax (:func:`fit_parallax`).
+    ``parallax`` P: optional (H, W, 2) float32 static-world parallax (:func:`fit_parallax`);
+    ``maps``: :func:`world_maps` of ``h`` and P if already computed.
     """
-    maps = world_maps(h, prev.shape[:2], parallax)
+    if maps is None:
+        maps = world_maps(h, prev.shape[:2], parallax)
     return cv2.remap(prev, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 
@@ -188,9 +171,12 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
             nodes above ``RELIABLE`` fit the camera.
         flow_back: (H, W, 2) float32 backward flow (current -> previous).
         prev: (H, W, 3) uint8 previous frame.
-        support, threshold, min_shift: as in :func:`fit_camera_motion`, except that
-            ``support`` counts the nodes the homography *or* the parallax explains;
-            ``support`` 1.0 turns compensation off.
+        support: fraction of the reliable nodes that the static world's model (the
+            homography's inliers *or* the parallax's) must explain; 1.0 turns compensation
+            off.
+        threshold: px, RANSAC reprojection threshold (homography and epipole).
+        min_shift: px; the camera moved only if the homography moves the nodes by more
+            than this (median).
         parallax: ``support`` of :func:`fit_parallax` (1.0, the default here: homography
             only).
         grid_shape: (rows, cols) of the node grid (``points`` row-major); needed for
@@ -204,8 +190,9 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     Returns:
         (flow_m, prev_m, back_m, cam): the backward flow (H, W, 2), the previous frame and
         the nodes' backward targets (n, 2) relative to the static world (homography and
-        parallax; 0 flow where the view just entered), and the camera's 3x3 homography -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects)
-        when no camera motion is found.
+        parallax; 0 flow where the view just entered), and the camera's 3x3 homography
+        -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects) when no
+        camera motion is found.
     """
     if support >= 1.0:
         return flow_back, prev, back_points, None
@@ -240,7 +227,7 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
         return flow_back, prev, back_points, None
     par_field = None if par is None else par[0]
     maps = world_maps(cam, flow_m.shape[:2], par_field)
-    prev_m = cv2.remap(prev, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    prev_m = stabilize_previous(prev, cam, maps=maps)
     if par_field is not None:
         flow_m = flow_m - par_field
     # what has just come into view (its static-world source lies outside the previous

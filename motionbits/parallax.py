@@ -117,8 +117,8 @@ def parallax_field(residual: np.ndarray, e: np.ndarray, region: np.ndarray, *,
         residual: (H, W, 2) float32 motion left by the camera homography (backward).
         e: (3,) homogeneous epipole (:func:`fit_epipole`).
         region: (H, W) bool, where the static world's parallax was found.
-        threshold: px; a pixel of ``region`` whose residual exceeds this and lies within it of its
-            epipolar line keeps its own along-line residual, the others get the smooth
+        threshold: px; a pixel of ``region`` whose residual exceeds this and lies within
+            it of its epipolar line keeps its own along-line residual, the others get the smooth
             interpolation of those pixels' parallax (Gaussian, ``SMOOTH_FRACTION`` of the
             longer side).
     """

@@ -5,7 +5,7 @@ import numpy as np
 from conftest import best_iou
 
 from motionbits import MotionBitsConfig, MotionBitsSegmenter
-from motionbits.camera import compensate_flow, fit_camera_motion
+from motionbits.camera import compensate_camera
 from motionbits.synth import demo_clip
 
 
@@ -23,18 +23,28 @@ def _shaken(clip, amp, seed=1):
     return frames, gt.astype(np.int32)
 
 
-def test_fit_camera_motion_recovers_a_shift_and_ignores_identity():
-    ys, xs = np.mgrid[0:100:5, 0:100:5]
+def test_compensate_camera_recovers_a_shift_and_ignores_identity():
+    h, w = 100, 100
+    ys, xs = np.mgrid[0:h:5, 0:w:5]
     p = np.stack([xs.ravel(), ys.ravel()], 1).astype(np.float32)
-    ok = np.ones(len(p), bool)
+    ok = np.ones(len(p))
+    prev = np.random.default_rng(0).integers(0, 255, (h, w, 3), dtype=np.uint8)
+    shift = np.float32([1.5, -0.7])
+    flow = np.broadcast_to(shift, (h, w, 2)).copy()
     kw = dict(support=0.5, threshold=1.0, min_shift=0.25)
-    assert fit_camera_motion(p, p + 0.05, ok, **kw) is None  # static camera: untouched
-    q = p + np.float32([1.5, -0.7])
+    still = compensate_camera(p, p + 0.05, ok, flow, prev, **kw)
+    assert still[3] is None and still[0] is flow and still[1] is prev  # static: untouched
+    q = p + shift
     q[:40] += 6.0  # a moving body, 10% of the nodes
-    h = fit_camera_motion(p, q, ok, **kw)
-    assert h is not None and np.allclose(h[:2, 2], [1.5, -0.7], atol=0.05)
-    flow = np.broadcast_to(np.float32([1.5, -0.7]), (20, 30, 2)).copy()
-    assert np.abs(compensate_flow(flow, h)).max() < 0.05
+    flow_m, prev_m, back_m, cam = compensate_camera(p, q, ok, flow, prev, **kw)
+    assert cam is not None and np.allclose(cam[:2, 2], shift, atol=0.05)
+    assert np.abs(flow_m).max() < 0.05  # the camera's motion is gone everywhere
+    assert np.abs(back_m[40:] - p[40:]).max() < 0.05
+    # the stabilised previous frame is prev(p + shift)
+    map_x, map_y = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    expected = cv2.remap(prev, map_x + shift[0], map_y + shift[1], cv2.INTER_LINEAR)
+    inner = (slice(5, -5), slice(5, -5))
+    assert np.abs(prev_m[inner].astype(int) - expected[inner].astype(int)).max() <= 2
 
 
 def test_shaking_camera_still_segments_the_demo_bodies():
