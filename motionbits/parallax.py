@@ -93,7 +93,8 @@ def fit_epipole(points: np.ndarray, residual: np.ndarray, candidates: np.ndarray
     # MSAC: truncated squared distances, so that the most precise of the hypotheses with
     # many inliers wins
     best = hyp[np.argmin((np.minimum(dists, threshold) ** 2).sum(1))]
-    inl = epipolar_distance(p, residual[idx], best)[0] < threshold
+    best_dist = epipolar_distance(p, residual[idx], best)[0]
+    inl = best_dist < threshold
     # least squares on the inliers, each residual line weighted so that its term is the
     # residual's px distance from its epipolar line (one reweighting step from ``best``)
     hp = _homogeneous(p[inl])
@@ -101,11 +102,11 @@ def fit_epipole(points: np.ndarray, residual: np.ndarray, candidates: np.ndarray
     across = np.linalg.norm(np.cross(hp, e0)[:, :2], axis=1)
     weight = np.linalg.norm(residual[idx][inl], axis=1) / np.maximum(across, 1e-9)
     e = np.linalg.svd(lines[inl] * weight[:, None], full_matrices=False)[2][-1]
-    cost = lambda x: np.minimum(epipolar_distance(p, residual[idx], x)[0], threshold) ** 2
-    if cost(e).sum() <= cost(best).sum():
-        best = e
+    e_dist = epipolar_distance(p, residual[idx], e)[0]
+    if (np.minimum(e_dist, threshold) ** 2).sum() <= (np.minimum(best_dist, threshold) ** 2).sum():
+        best, best_dist = e, e_dist
     out = np.zeros(len(points), bool)
-    out[idx] = epipolar_distance(p, residual[idx], best)[0] < threshold
+    out[idx] = best_dist < threshold
     return best, out
 
 
