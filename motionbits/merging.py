@@ -9,7 +9,7 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   absorbs the scale change of a part moving in depth) fitted to both explains the images of
   each about as well as its own motion does (photometric residual, grey levels);
 - they *disagree* when that union motion explains one of them clearly worse, or when one
-  was born out of pixels that had never moved while the other was moving (background
+  was born out of pixels seen standing still while the other was moving (background
   counts as a label in the paper: a point that moved and one that did not are never one
   rigid body -- this keeps a pushed block apart from the gripper that pushes it);
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
@@ -28,16 +28,32 @@ from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
 
-__all__ = ["touching_pairs", "fit_affine", "MotionBitGroups",
+__all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "seen_still",
            "observe_touching"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
 STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-#: A node is in view when its origin lies this many grid cells inside the previous frame.
-IN_VIEW_CELLS = 2
-#: A new MotionBit was born out of fresh pixels when more than this share of its nodes
-#: came from pixels in view that had never been in a MotionBit.
+#: A new MotionBit was born out of still pixels when more than this share of its nodes
+#: came from pixels never in a MotionBit and seen standing still before (:func:`seen_still`).
 BORN_FRESH = 0.5
+
+
+def seen_still(carried: np.ndarray, flow: np.ndarray, reliable: np.ndarray,
+               move_threshold: float) -> np.ndarray:
+    """Where each pixel, followed by the flow, has been seen standing still: ``carried``
+    (the map of the last frame carried to this one) or now (reliable flow that moves it
+    less than ``move_threshold``).
+
+    Args:
+        carried: (H, W) int32, 1 where the pixel was seen still before.
+        flow: (H, W, 2) float32 backward flow relative to the camera (px).
+        reliable: (H, W) bool, where the flow is consistent both ways.
+
+    Returns:
+        (H, W) int32 map of the same kind, for the next frame.
+    """
+    still = reliable & (cv2.magnitude(flow[..., 0], flow[..., 1]) < move_threshold)
+    return (still | (carried > 0)).astype(np.int32)
 
 
 def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
@@ -167,15 +183,15 @@ def stillness_visible(labels: np.ndarray, a: int, motion: np.ndarray, cur: np.nd
 def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray,
                      node_ids: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                      trans: np.ndarray, moving: set[int], first_new: int,
-                     history_nodes: np.ndarray, seen_points: np.ndarray,
-                     back_points: np.ndarray, reliability: np.ndarray, cur: np.ndarray,
-                     prev: np.ndarray, *, disagree: float) -> None:
+                     still_before: np.ndarray, back_points: np.ndarray,
+                     reliability: np.ndarray, cur: np.ndarray, prev: np.ndarray, *,
+                     disagree: float) -> None:
     """Record in ``groups`` this frame's evidence on every pair of touching MotionBits.
 
-    A MotionBit born now out of pixels in view that had never been in a MotionBit
-    (``BORN_FRESH`` of its nodes) and a moving older MotionBit whose motion would have
-    shown on it are different bodies for good (the pushed block is not the gripper that
-    pushes it). Otherwise, where either has a motion this frame, one affine motion is
+    A MotionBit born now out of pixels never in a MotionBit and seen standing still at an
+    earlier frame (``BORN_FRESH`` of its nodes) and a moving older MotionBit whose motion
+    would have shown on it are different bodies for good (the pushed block is not the
+    gripper that pushes it; a part of the gripper that the masks missed while it moved is). Otherwise, where either has a motion this frame, one affine motion is
     fitted to the nodes of both and :func:`union_excess` is observed -- a member without
     motion stands still (``STILL``), which can show that they differ, never that they
     agree.
@@ -189,8 +205,8 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
             and ``trans`` (K, 2).
         moving: ids whose motion moved their nodes this frame.
         first_new: ids from this one on were born now.
-        history_nodes: (n,) int label-history class of each node (0 = never in a MotionBit).
-        seen_points: (n, 2) where each node came from (true backward flow).
+        still_before: (n,) bool nodes never in a MotionBit and seen standing still at an
+            earlier frame (:func:`seen_still`).
         back_points: (n, 2) each node's backward target relative to the camera.
         reliability: (n,) flow reliability of each node.
         cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
@@ -198,11 +214,8 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     """
     own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
     reach = int(np.ceil(max(grid.cell)))
-    margin = IN_VIEW_CELLS * max(grid.cell)
-    in_view = np.all((seen_points >= margin) & (seen_points < np.array(
-        [grid.width, grid.height]) - margin), axis=1)
     born = {int(i) for i in ids[ids >= first_new]
-            if np.mean((history_nodes == 0) & in_view, where=node_ids == i) > BORN_FRESH}
+            if np.mean(still_before, where=node_ids == i) > BORN_FRESH}
     for a, b in touching_pairs(labels, reach=reach):
         if groups.known(a, b):
             continue

@@ -32,7 +32,7 @@ from motionbits.graph import (
 from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks,
                               snap_to_edges)
-from motionbits.merging import MotionBitGroups, observe_touching
+from motionbits.merging import MotionBitGroups, observe_touching, seen_still
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
@@ -128,6 +128,7 @@ class MotionBitsSegmenter:
         # label history and largest earlier edge weights (whole video or config.window)
         self._temporal: TemporalState | None = None
         self._earned: np.ndarray | None = None  # (h, w) int32 evidence of the labels (masks)
+        self._still: np.ndarray | None = None  # (h, w) int32 pixels seen standing still
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
         self._origins: dict[int, Origin] = {}  # id -> its birth frame and motion since
@@ -164,6 +165,7 @@ class MotionBitsSegmenter:
         self._labels = np.zeros((hw, ww), np.int32)
         self._temporal = TemporalState((hw, ww), self._grid.neighbors.shape, self.config.window)
         self._earned = np.zeros((hw, ww), np.int32)  # 1 = its MotionBit showed there
+        self._still = np.zeros((hw, ww), np.int32)  # 1 = seen standing still (merging)
         self._noise_cov = twist_noise_covariance(self._grid.points, self._grid.neighbors,
                                                  self.config.flow_noise)
 
@@ -253,8 +255,8 @@ class MotionBitsSegmenter:
             prior_valid = (fb_err < cfg.fb_sigma) & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
-            (prior, earned), history = self._temporal.carry([self._labels, self._earned],
-                                                            flow_back, back_maps)
+            (prior, earned, still_seen), history = self._temporal.carry(
+                [self._labels, self._earned, self._still], flow_back, back_maps)
             earned = earned > 0
 
         with self._stage("twists"):
@@ -345,9 +347,10 @@ class MotionBitsSegmenter:
         with self._stage("merging"):
             moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
             self._spans.record(moving, self.frame_index)
+            still_before = (hist_nodes == 0) & (still_seen[ix[:, 1], ix[:, 0]] > 0)
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
-                             first_new, hist_nodes, seen_pts, back_pts, reliability, cur_g,
-                             prev_g, disagree=cfg.merge_disagree)
+                             first_new, still_before, back_pts, reliability, cur_g, prev_g,
+                             disagree=cfg.merge_disagree)
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
@@ -370,6 +373,8 @@ class MotionBitsSegmenter:
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
+            self._still = seen_still(still_seen, flow_m, fb_err < cfg.fb_sigma,
+                                     cfg.move_threshold)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g

@@ -6,7 +6,8 @@ import pytest
 
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
-from motionbits.merging import MotionBitGroups, touching_pairs
+from motionbits.merging import MotionBitGroups, observe_touching, seen_still, touching_pairs
+from motionbits.nodes import NodeGrid
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
 SIZE = (240, 320)
@@ -91,3 +92,41 @@ def test_touching_pairs():
     assert touching_pairs(lab, reach=2) == {(1, 2)}  # 2 px apart
     assert touching_pairs(lab, reach=1) == set()
 
+
+
+def test_seen_still_remembers_stillness_and_ignores_unreliable_flow():
+    flow = np.zeros((10, 12, 2), np.float32)
+    flow[:, 6:] = (2.0, 0.0)  # the right half moves 2 px
+    reliable = np.ones((10, 12), bool)
+    reliable[:3] = False  # no trustworthy flow on the top rows: not seen at all
+    carried = np.zeros((10, 12), np.int32)
+    carried[5:, 8:] = 1  # seen still at an earlier frame
+    out = seen_still(carried, flow, reliable, move_threshold=0.6)
+    assert out.dtype == np.int32
+    assert out[3:, :6].all() and not out[:3, :6].any()
+    assert not out[:5, 6:].any() and out[5:, 8:].all() and not out[5:, 6:8].any()
+
+
+@pytest.mark.parametrize("stood_still", [True, False])
+def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(stood_still):
+    """A MotionBit born next to a moving one with the same motion: a block that stood still
+    while the gripper moved is another body for good; a part of the gripper that moved
+    unlabelled is not kept apart (its pair is observed and may agree)."""
+    rng = np.random.default_rng(1)
+    h, w = 80, 120
+    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
+    cur = np.roll(prev, 3, axis=1)  # everything moved 3 px right
+    grid = NodeGrid.build(h, w, 20, 5)
+    labels = np.zeros((h, w), np.int32)
+    labels[20:60, 20:60], labels[20:60, 60:100] = 1, 2  # 1 = gripper, 2 = newborn
+    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
+    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    back = grid.points - np.array([3.0, 0.0], np.float32)
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    still_before = (node_ids == 2) & stood_still
+    observe_touching(groups, grid, labels, node_ids, np.array([1, 2]), np.zeros(2),
+                     np.array([[-3.0, 0.0], [-3.0, 0.0]]), {1, 2}, 2, still_before, back,
+                     np.ones(grid.n), cur, prev, disagree=6.0)
+    assert groups.known(1, 2) == stood_still
+    rep = groups.representatives([1, 2])
+    assert (rep[2] == 1) != stood_still
