@@ -7,6 +7,7 @@ import pytest
 
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import static_residual
+from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import snap_to_edges
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
@@ -49,6 +50,51 @@ def test_static_residual_explains_a_shadow_not_a_new_texture():
             assert plain > 20 and relit < 0.2 * plain, (plain, relit)
         else:  # another texture: no smooth gain explains it
             assert relit > 0.6 * plain, (plain, relit)
+
+
+def test_normalised_frames_do_not_see_a_shadow():
+    base = cv2.cvtColor(_texture(0), cv2.COLOR_RGB2GRAY)
+    gain = _shadow((130, 120), 50, 0.5)
+    shaded = np.clip(base * gain, 0, 255).astype(np.uint8)
+    inside = gain < 0.7
+    grey = np.abs(shaded.astype(np.float32) - base)[inside].mean()
+    norm = np.abs(normalize_contrast(shaded).astype(np.float32) - normalize_contrast(base))
+    assert grey > 40 and norm[inside].mean() < 0.1 * grey, (grey, norm[inside].mean())
+
+
+def _moved_share(flow: np.ndarray) -> float:
+    return float((np.hypot(flow[..., 0], flow[..., 1]) > 0.5).mean())
+
+
+def test_dis_flow_does_not_follow_a_hard_shadow_and_finds_the_body():
+    """A hard-edged shadow (penumbra ~2 px) jumps 15 px over a static texture while a
+    textured square moves 8 px: the flow is ~0 under the shadow and 8 px on the body.
+    Plain DIS (``normalize=False``) on the same frames follows the shadow's edge."""
+    base = _texture(0)
+    a, b = base.copy(), base.copy()
+    a[150:210, 200:260] = b[150:210, 208:268] = _texture(2)[150:210, 200:260]
+    a = np.clip(a * _shadow((110, 100), 50, 0.6, soft=2)[..., None], 0, 255).astype(np.uint8)
+    b = np.clip(b * _shadow((125, 100), 50, 0.6, soft=2)[..., None], 0, 255).astype(np.uint8)
+    static = np.ones(SIZE, bool)
+    static[140:220, 190:285] = False
+    robust, plain = DISFlow()(a, b), DISFlow(normalize=False)(a, b)
+    assert _moved_share(robust[static]) < 0.005 < 0.02 < _moved_share(plain[static])
+    body = robust[160:200, 210:250]
+    assert np.abs(np.median(body, axis=(0, 1)) - (8, 0)).max() < 0.2
+
+
+def test_plain_dis_flow_is_opencvs_and_the_frame_cache_sees_in_place_changes():
+    a, b = _texture(0), _texture(1)
+    gray = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) for f in (a, b)]
+    dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
+    np.testing.assert_array_equal(DISFlow(normalize=False)(a, b), dis.calc(*gray, None))
+    flow = DISFlow()
+    still = flow(a, a.copy())
+    assert _moved_share(still) == 0
+    shifted = np.roll(a, 4, axis=1)
+    a[:] = shifted  # the same array, new content: not the remembered frame any more
+    moved = flow(a, b)
+    np.testing.assert_array_equal(moved, DISFlow()(shifted, b))
 
 
 def _shadow_clip(n_frames: int = 12) -> list[np.ndarray]:
