@@ -57,6 +57,8 @@ _RANGES = {
     "pixel_evidence": "[0, inf)",
     "edge_band": "[0, inf)",
     "relight_sigma": "[0, inf)",
+    "reveal_tolerance": "[0, inf)",
+    "reveal_covered": "(0, inf)",
     "match_iou": "[0, 1]",
     "merge_agree": "[0, inf)",
     "merge_disagree": "[0, inf)",
@@ -166,6 +168,12 @@ class MotionBitsConfig:
     # exposure -- with the gain's smoothness this many grid cells (Gaussian sigma, e.g. 3);
     # it also explains flat bodies away (README: pickplace mIoU -7.5 with exact flow)
     relight_sigma: float = 0.0
+    # ours (motionbits/revealed.py): with a still camera, a pixel that looks as it did when
+    # last seen standing still -- within reveal_tolerance grey levels (5x5 mean; 0 = off)
+    # -- after something covered it (it differed by more than reveal_covered) is the static
+    # world uncovered again: "nothing moved" explains it, whatever flow smeared into it
+    reveal_tolerance: float = 10.0
+    reveal_covered: float = 20.0
     # ours (masks.snap_to_edges): each shown mask is trimmed back to the strongest image
     # edge within this many grid cells of its outline (0 = off; the state is not trimmed)
     edge_band: float = 1.0

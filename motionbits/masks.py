@@ -89,7 +89,8 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
                   prev_gray: np.ndarray, still: np.ndarray, prior: np.ndarray,
                   prior_valid: np.ndarray, texture: np.ndarray, earned: np.ndarray, *,
                   bonus: float, photo_weight: float, evidence: float, kept: np.ndarray,
-                  ambiguous: float) -> tuple[np.ndarray, np.ndarray]:
+                  ambiguous: float, revealed: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Label every pixel by the motion that best explains it.
 
     The cost of a motion at a pixel is its flow residual (px), weighted by how much texture
@@ -126,6 +127,10 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         ambiguous: px; where a cluster's motion moves a pixel less than this, the motion
             cannot be told from the background (e.g. near a centre of rotation) and the
             node-level cluster label gets the same credit as the prior.
+        revealed: (H, W) bool or None, background seen again after a body uncovered it
+            (:class:`motionbits.revealed.StaticMemory`): ``still`` there already holds the
+            residual against the remembered background, and the static cost drops its flow
+            term (the flow smears the body's motion into its wake).
 
     Returns:
         (H, W) int32 label map and the (H, W) bool ``earned`` map of this frame.
@@ -135,6 +140,8 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     static_photo = cv2.blur(still, (window, window))
     static_cost = texture * cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + (
         photo_weight * static_photo)
+    if revealed is not None:
+        static_cost[revealed] = photo_weight * static_photo[revealed]
     # last frame's label is credited where it was carried consistently; against the
     # background, a MotionBit's label only where its motion once showed in the images
     # (``earned``): elsewhere the background gets the same credit

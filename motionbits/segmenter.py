@@ -39,6 +39,7 @@ from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
 from motionbits.retirement import Origin, retire
+from motionbits.revealed import StaticMemory
 from motionbits.setdown import SetDown
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
@@ -129,6 +130,7 @@ class MotionBitsSegmenter:
         self._temporal: TemporalState | None = None
         self._earned: np.ndarray | None = None  # (h, w) int32 evidence of the labels (masks)
         self._still: np.ndarray | None = None  # (h, w) int32 pixels seen standing still
+        self._memory: StaticMemory | None = None  # the static world's look (revealed.py)
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
         self._origins: dict[int, Origin] = {}  # id -> its birth frame and motion since
@@ -166,6 +168,8 @@ class MotionBitsSegmenter:
         self._temporal = TemporalState((hw, ww), self._grid.neighbors.shape, self.config.window)
         self._earned = np.zeros((hw, ww), np.int32)  # 1 = its MotionBit showed there
         self._still = np.zeros((hw, ww), np.int32)  # 1 = seen standing still (merging)
+        self._memory = StaticMemory((hw, ww), self.config.reveal_tolerance,
+                                    self.config.reveal_covered)
         self._noise_cov = twist_noise_covariance(self._grid.points, self._grid.neighbors,
                                                  self.config.flow_noise)
 
@@ -316,6 +320,11 @@ class MotionBitsSegmenter:
             # "nothing moved" explains a pixel also when only the light changed on it
             still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
                      if cfg.relight_sigma else np.abs(cur_g - prev_g))
+            # ... and where it shows the static world seen again after a body uncovered it
+            cur_rgb = cur.astype(np.float32)
+            revealed = self._memory.revealed(cur_rgb, cam is not None)
+            if revealed is not None:
+                still[revealed] = np.minimum(still, np.abs(cur_g - self._memory.gray))[revealed]
             evidence = cache(lambda: motion_gain(still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
@@ -332,7 +341,8 @@ class MotionBitsSegmenter:
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g, still,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
                 bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
-                evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
+                evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold,
+                revealed=revealed)
             cw, ch = grid.cell
             labels = remove_specks(labels, min_area=int(np.ceil(SPECK_CELLS * cw * ch)))
             # bodies set down: pieces left behind by a moving MotionBit become MotionBits
@@ -373,8 +383,10 @@ class MotionBitsSegmenter:
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
-            self._still = seen_still(still_seen, flow_m, fb_err < cfg.fb_sigma,
-                                     cfg.move_threshold)
+            reliable = fb_err < cfg.fb_sigma
+            self._still = seen_still(still_seen, flow_m, reliable, cfg.move_threshold)
+            self._memory.update(cur_rgb, cur_g, prev_g, reliable & (cv2.magnitude(
+                flow_m[..., 0], flow_m[..., 1]) < cfg.move_threshold), cam is not None)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g
