@@ -28,64 +28,75 @@ __all__ = ["StaticMemory"]
 WINDOW = 5
 
 
-def _mean_abs_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(H, W) float32 ``WINDOW``-mean absolute difference of two (H, W) or (H, W, C)
-    float32 images, the largest over the channels (a red block on a green table of the
-    same grey level differs)."""
-    diff = cv2.blur(cv2.absdiff(a, b), (WINDOW, WINDOW))
-    return diff if diff.ndim == 2 else diff.max(axis=2)
+def _color_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(H, W) uint8 ``WINDOW``-mean absolute difference of two (H, W, 3) uint8 images, the
+    largest over the channels (a red block on a green table of the same grey level
+    differs)."""
+    r, g, b_ = cv2.split(cv2.blur(cv2.absdiff(a, b), (WINDOW, WINDOW)))
+    return cv2.max(cv2.max(r, g), b_)
 
 
 class StaticMemory:
     """Per-pixel look of the static world where it was last seen still (static camera).
 
+    Each frame, :meth:`observe` first (what is revealed), then :meth:`update`.
+
     Args:
         shape: (H, W) of the working frames.
-        tolerance: grey levels (``WINDOW`` mean): a pixel looks as remembered within this;
-            a pixel whose grey level changed less than this over a frame, under reliable
-            flow that moves it less than the move threshold, is seen standing still.
-        covered: grey levels (``WINDOW`` mean): a pixel that differs from its memory by
-            more than this was covered by something else.
+        tolerance: grey levels (``WINDOW`` mean; 0 = off): a pixel looks as remembered
+            within this on every channel; a pixel whose grey level changed less than this
+            over a frame, under reliable flow that moves it less than the move threshold,
+            is seen standing still.
+        covered: grey levels (``WINDOW`` mean, largest channel): a pixel that differs
+            from its memory by more than this was covered by something else.
     """
 
     def __init__(self, shape: tuple[int, int], tolerance: float, covered: float) -> None:
         self.tolerance, self.covered = tolerance, covered
-        self.color = np.zeros((*shape, 3), np.float32)  # remembered RGB
+        self.color = np.zeros((*shape, 3), np.uint8)  # remembered RGB
         self.gray = np.zeros(shape, np.float32)  # remembered grey level
         self.known = np.zeros(shape, bool)  # seen standing still at some frame
         self.was_covered = np.zeros(shape, bool)  # looked otherwise since
+        self._difference: np.ndarray | None = None  # this frame's, from observe()
 
-    def revealed(self, cur: np.ndarray, camera_moved: bool) -> np.ndarray | None:
-        """(H, W) bool: pixels covered since they were last seen still that look as they
-        did then (every colour channel); None when the memory does not hold (camera
-        moving, or ``tolerance`` 0).
-
-        Args:
-            cur: (H, W, 3) float32 current RGB frame.
-            camera_moved: the camera moved between the last frame and this one.
-        """
-        if camera_moved or self.tolerance <= 0:
-            return None
-        return self.known & self.was_covered & (
-            _mean_abs_diff(cur, self.color) < self.tolerance)
-
-    def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
-               still: np.ndarray, camera_moved: bool) -> None:
-        """Fold in the current frame.
+    def observe(self, cur: np.ndarray, camera_moved: bool) -> np.ndarray | None:
+        """Compare the current frame with the memory.
 
         Args:
-            cur: (H, W, 3) float32 current RGB frame.
-            cur_gray, prev_gray: (H, W) float32 grey frames.
-            still: (H, W) bool, reliable flow moving the pixel less than the move threshold.
-            camera_moved: the camera moved: the memory is cleared.
+            cur: (H, W, 3) uint8 current RGB frame.
+            camera_moved: the camera moved between the last frame and this one: the
+                memory is cleared.
+
+        Returns:
+            (H, W) bool, pixels covered since they were last seen still that look as they
+            did then; None when the memory does not hold (camera moving, or off).
         """
+        self._difference = None
         if camera_moved:
             self.known[:] = False
             self.was_covered[:] = False
+        if camera_moved or self.tolerance <= 0:
+            return None
+        self._difference = _color_difference(cur, self.color)
+        return self.known & self.was_covered & (self._difference < self.tolerance)
+
+    def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
+               still: np.ndarray) -> None:
+        """Fold in the current frame (after :meth:`observe`; nothing if that returned
+        None).
+
+        Args:
+            cur: (H, W, 3) uint8 current RGB frame.
+            cur_gray, prev_gray: (H, W) float32 grey frames.
+            still: (H, W) bool, reliable flow moving the pixel less than the move threshold.
+        """
+        if self._difference is None:
             return
-        self.was_covered |= _mean_abs_diff(cur, self.color) > self.covered
-        calm = still & (_mean_abs_diff(cur_gray, prev_gray) < self.tolerance)
-        self.color[calm] = cur[calm]
-        self.gray[calm] = cur_gray[calm]
+        self.was_covered |= self._difference > self.covered
+        calm = still & (cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW))
+                        < self.tolerance)
+        np.copyto(self.color, cur, where=calm[..., None])
+        np.copyto(self.gray, cur_gray, where=calm)
         self.known |= calm
         self.was_covered &= ~calm
+        self._difference = None

@@ -321,10 +321,10 @@ class MotionBitsSegmenter:
             still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
                      if cfg.relight_sigma else np.abs(cur_g - prev_g))
             # ... and where it shows the static world seen again after a body uncovered it
-            cur_rgb = cur.astype(np.float32)
-            revealed = self._memory.revealed(cur_rgb, cam is not None)
+            revealed = self._memory.observe(cur, cam is not None)
             if revealed is not None:
-                still[revealed] = np.minimum(still, np.abs(cur_g - self._memory.gray))[revealed]
+                np.copyto(still, np.minimum(still, cv2.absdiff(cur_g, self._memory.gray)),
+                          where=revealed)
             evidence = cache(lambda: motion_gain(still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
@@ -385,8 +385,8 @@ class MotionBitsSegmenter:
             self._labels = labels
             reliable = fb_err < cfg.fb_sigma
             self._still = seen_still(still_seen, flow_m, reliable, cfg.move_threshold)
-            self._memory.update(cur_rgb, cur_g, prev_g, reliable & (cv2.magnitude(
-                flow_m[..., 0], flow_m[..., 1]) < cfg.move_threshold), cam is not None)
+            self._memory.update(cur, cur_g, prev_g, reliable & (cv2.magnitude(
+                flow_m[..., 0], flow_m[..., 1]) < cfg.move_threshold))
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g

@@ -135,32 +135,34 @@ def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(stood_still):
 
 def test_static_memory_reveals_background_seen_again_after_it_was_covered():
     rng = np.random.default_rng(0)
-    table = rng.uniform(0, 255, (40, 60, 3)).astype(np.float32)
+    table = rng.integers(0, 256, (40, 60, 3), dtype=np.uint8)
     memory = StaticMemory(table.shape[:2], tolerance=10.0, covered=20.0)
     everywhere = np.ones(table.shape[:2], bool)
 
-    def update(cur, prev, still=everywhere, camera_moved=False):
-        memory.update(cur, cur.mean(axis=2), prev.mean(axis=2), still, camera_moved)
+    def step(cur, prev, still=everywhere, camera_moved=False):
+        revealed = memory.observe(cur, camera_moved)
+        gray = [f.mean(axis=2, dtype=np.float32) for f in (cur, prev)]
+        memory.update(cur, *gray, still)
+        return revealed
 
-    update(table, table)  # seen standing still
+    step(table, table)  # seen standing still
     arm = table.copy()
-    arm[10:30, 10:50] = 30.0  # a flat dark arm covers the middle
+    arm[10:30, 10:50] = 30  # a flat dark arm covers the middle
     moving = everywhere.copy()
     moving[10:30, 10:50] = False  # (its flow moves)
-    update(arm, table, moving)
+    step(arm, table, moving)
     back = table.copy()
     # the right half uncovers something new: the same grey levels, other colours
     back[10:30, 30:50] = table[10:30, 30:50, ::-1]
-    revealed = memory.revealed(back, camera_moved=False)
+    revealed = step(back, arm, moving)
     assert revealed[13:27, 13:27].all()  # left half, away from the window's reach
     assert not revealed[14:26, 34:46].any()  # another look: not the static world
     assert not revealed[:8].any()  # never covered: the plain "nothing moved" holds
     # seen still again, the pixel is remembered anew and is no longer "revealed"
-    update(back, back)
-    assert not memory.revealed(back, camera_moved=False).any()
+    step(back, back)
+    assert not step(back, back).any()
     # a moving camera clears the memory; switched off, nothing is revealed
-    assert memory.revealed(back, camera_moved=True) is None
-    update(arm, back, camera_moved=True)
+    assert step(arm, back, camera_moved=True) is None
     assert not memory.known.any()
     off = StaticMemory(table.shape[:2], tolerance=0.0, covered=20.0)
-    assert off.revealed(table, camera_moved=False) is None
+    assert off.observe(table, camera_moved=False) is None
