@@ -5,10 +5,12 @@ uncovered gets the hand's flow (the flow "smears" into its wake), and both of th
 segmenter's hypotheses fail there: the hand's motion pulls back the hand, "nothing moved"
 the hand too -- it covered the pixel a frame ago. The wake then becomes part of the hand's
 MotionBit or a new one (a ghost). What explains such a pixel is the static world as it was
-*before* the body covered it. :class:`StaticMemory` keeps, for each pixel, its grey level
+*before* the body covered it. :class:`StaticMemory` keeps, for each pixel, its colour
 when it was last seen standing still, and whether something with another look has covered
 it since; a pixel that looks as remembered again after being covered is *revealed*
-background (:meth:`StaticMemory.revealed`), which "nothing moved" explains.
+background (:meth:`StaticMemory.observe`), which "nothing moved" explains. The price: a
+body the hand covers and then lifts by a few pixels looks as it did at rest, and loses
+those pixels (README, "Background seen again").
 
 The memory holds only while the camera stands still (a moving camera clears it: the
 stabilised frames would have to carry it, which they do not yet). A body that stood still
