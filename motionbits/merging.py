@@ -28,7 +28,7 @@ from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
 
-__all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "seen_still",
+__all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "standing_still", "seen_still",
            "observe_touching"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
@@ -38,22 +38,26 @@ STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 BORN_FRESH = 0.5
 
 
-def seen_still(carried: np.ndarray, flow: np.ndarray, reliable: np.ndarray,
-               move_threshold: float) -> np.ndarray:
+def standing_still(flow: np.ndarray, reliable: np.ndarray, move_threshold: float) -> np.ndarray:
+    """(H, W) bool: pixels seen standing still now -- reliable flow (consistent both ways)
+    that moves them less than ``move_threshold`` px; ``flow``: (H, W, 2) float32 backward
+    flow relative to the camera."""
+    return reliable & (cv2.magnitude(flow[..., 0], flow[..., 1]) < move_threshold)
+
+
+def seen_still(carried: np.ndarray, standing: np.ndarray) -> np.ndarray:
     """Where each pixel, followed by the flow, has been seen standing still: ``carried``
-    (the map of the last frame carried to this one) or now (reliable flow that moves it
-    less than ``move_threshold``).
+    (the map of the last frame carried to this one) or now (``standing``, from
+    :func:`standing_still`).
 
     Args:
         carried: (H, W) int32, 1 where the pixel was seen still before.
-        flow: (H, W, 2) float32 backward flow relative to the camera (px).
-        reliable: (H, W) bool, where the flow is consistent both ways.
+        standing: (H, W) bool, seen standing still now.
 
     Returns:
         (H, W) int32 map of the same kind, for the next frame.
     """
-    still = reliable & (cv2.magnitude(flow[..., 0], flow[..., 1]) < move_threshold)
-    return (still | (carried > 0)).astype(np.int32)
+    return (standing | (carried > 0)).astype(np.int32)
 
 
 def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
@@ -191,8 +195,9 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     A MotionBit born now out of pixels never in a MotionBit and seen standing still at an
     earlier frame (``BORN_FRESH`` of its nodes) and a moving older MotionBit whose motion
     would have shown on it are different bodies for good (the pushed block is not the
-    gripper that pushes it; a part of the gripper that the masks missed while it moved is). Otherwise, where either has a motion this frame, one affine motion is
-    fitted to the nodes of both and :func:`union_excess` is observed -- a member without
+    gripper that pushes it; a part of the gripper that the masks missed while it moved
+    is). Otherwise, where either has a motion this frame, one affine motion is fitted to
+    the nodes of both and :func:`union_excess` is observed -- a member without
     motion stands still (``STILL``), which can show that they differ, never that they
     agree.
 

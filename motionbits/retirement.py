@@ -3,8 +3,8 @@
 A MotionBit can be born where the flow moved and the world did not: in the wake of an arm
 sweeping in front of a wall, under smeared flow beside a fast body. Such a MotionBit then
 stops, and a stopped MotionBit keeps its mask -- so it would stay for good. The test that
-tells it from a body that really moved and stopped: keep the frame before its birth, and the motion accumulated since (current -> that frame) both of
-the MotionBit and of the static world (the camera's motion; identity for a static camera).
+tells it from a body that really moved and stopped: keep the frame before its birth, and
+the motion accumulated since (current -> that frame) both of the MotionBit and of the static world (the camera's motion; identity for a static camera).
 If the world's motion explains the MotionBit's pixels today clearly better than its own
 accumulated motion does, it never moved: it is retired.
 """
@@ -104,13 +104,6 @@ def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
     return world - body
 
 
-def _world_residual(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
-                    box: tuple[slice, slice]) -> float:
-    """:func:`_residual` of the static world's motion over the pixels ``mask`` of the
-    image box ``box``."""
-    return _residual(origin.frame, origin.world, cur_gray, box, mask)
-
-
 def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
            thetas: np.ndarray, trans: np.ndarray, first_new: int, cam: np.ndarray | None,
            prev_gray: np.ndarray, cur_gray: np.ndarray, margin: float, *,
@@ -162,7 +155,7 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         world_res, body_res = origin_residuals(origin, cur_gray, mask, MIN_SEPARATION,
                                                (box[0].start, box[1].start))
         if first is not None and np.isfinite(body_res):
-            from_first = _world_residual(first, cur_gray, mask, box)  # box: find_objects
+            from_first = _residual(first.frame, first.world, cur_gray, box, mask)
             if np.isnan(world_res) or from_first < world_res:  # NaN: out of view then
                 world_res = from_first
         if world_res < explained and world_res - body_res < -margin:

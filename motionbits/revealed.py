@@ -61,11 +61,16 @@ class StaticMemory:
         self.was_covered = np.zeros(shape, bool)  # looked otherwise since
         self._difference: np.ndarray | None = None  # this frame's, from observe()
 
-    def observe(self, cur: np.ndarray, camera_moved: bool) -> np.ndarray | None:
-        """Compare the current frame with the memory.
+    def observe(self, cur: np.ndarray, cur_gray: np.ndarray, still: np.ndarray,
+                camera_moved: bool) -> np.ndarray | None:
+        """Compare the current frame with the memory; where it is revealed, lower the
+        residual of "nothing moved" to the one against the remembered grey level.
 
         Args:
             cur: (H, W, 3) uint8 current RGB frame.
+            cur_gray: (H, W) float32 current grey frame.
+            still: (H, W) float32 grey levels by which "nothing moved" misses each pixel,
+                lowered in place where revealed.
             camera_moved: the camera moved between the last frame and this one: the
                 memory is cleared.
 
@@ -80,22 +85,25 @@ class StaticMemory:
         if camera_moved or self.tolerance <= 0:
             return None
         self._difference = _color_difference(cur, self.color)
-        return self.known & self.was_covered & (self._difference < self.tolerance)
+        revealed = self.known & self.was_covered & (self._difference < self.tolerance)
+        np.copyto(still, np.minimum(still, cv2.absdiff(cur_gray, self.gray)), where=revealed)
+        return revealed
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
-               still: np.ndarray) -> None:
+               standing: np.ndarray) -> None:
         """Fold in the current frame (after :meth:`observe`; nothing if that returned
         None).
 
         Args:
             cur: (H, W, 3) uint8 current RGB frame.
             cur_gray, prev_gray: (H, W) float32 grey frames.
-            still: (H, W) bool, reliable flow moving the pixel less than the move threshold.
+            standing: (H, W) bool, seen standing still now
+                (:func:`motionbits.merging.standing_still`).
         """
         if self._difference is None:
             return
         self.was_covered |= self._difference > self.covered
-        calm = still & (cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW))
+        calm = standing & (cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW))
                         < self.tolerance)
         np.copyto(self.color, cur, where=calm[..., None])
         np.copyto(self.gray, cur_gray, where=calm)

@@ -32,7 +32,7 @@ from motionbits.graph import (
 from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks,
                               snap_to_edges)
-from motionbits.merging import MotionBitGroups, observe_touching, seen_still
+from motionbits.merging import MotionBitGroups, observe_touching, seen_still, standing_still
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
@@ -321,10 +321,7 @@ class MotionBitsSegmenter:
             still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
                      if cfg.relight_sigma else np.abs(cur_g - prev_g))
             # ... and where it shows the static world seen again after a body uncovered it
-            revealed = self._memory.observe(cur, cam is not None)
-            if revealed is not None:
-                np.copyto(still, np.minimum(still, cv2.absdiff(cur_g, self._memory.gray)),
-                          where=revealed)
+            revealed = self._memory.observe(cur, cur_g, still, cam is not None)
             evidence = cache(lambda: motion_gain(still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
@@ -383,10 +380,9 @@ class MotionBitsSegmenter:
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
-            reliable = fb_err < cfg.fb_sigma
-            self._still = seen_still(still_seen, flow_m, reliable, cfg.move_threshold)
-            self._memory.update(cur, cur_g, prev_g, reliable & (cv2.magnitude(
-                flow_m[..., 0], flow_m[..., 1]) < cfg.move_threshold))
+            standing = standing_still(flow_m, fb_err < cfg.fb_sigma, cfg.move_threshold)
+            self._still = seen_still(still_seen, standing)
+            self._memory.update(cur, cur_g, prev_g, standing)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g

@@ -6,7 +6,8 @@ import pytest
 
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
-from motionbits.merging import MotionBitGroups, observe_touching, seen_still, touching_pairs
+from motionbits.merging import (MotionBitGroups, observe_touching, seen_still, standing_still,
+                                touching_pairs)
 from motionbits.nodes import NodeGrid
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -102,7 +103,7 @@ def test_seen_still_remembers_stillness_and_ignores_unreliable_flow():
     reliable[:3] = False  # no trustworthy flow on the top rows: not seen at all
     carried = np.zeros((10, 12), np.int32)
     carried[5:, 8:] = 1  # seen still at an earlier frame
-    out = seen_still(carried, flow, reliable, move_threshold=0.6)
+    out = seen_still(carried, standing_still(flow, reliable, move_threshold=0.6))
     assert out.dtype == np.int32
     assert out[3:, :6].all() and not out[:3, :6].any()
     assert not out[:5, 6:].any() and out[5:, 8:].all() and not out[5:, 6:8].any()
@@ -139,10 +140,14 @@ def test_static_memory_reveals_background_seen_again_after_it_was_covered():
     memory = StaticMemory(table.shape[:2], tolerance=10.0, covered=20.0)
     everywhere = np.ones(table.shape[:2], bool)
 
-    def step(cur, prev, still=everywhere, camera_moved=False):
-        revealed = memory.observe(cur, camera_moved)
+    def step(cur, prev, standing=everywhere, camera_moved=False):
         gray = [f.mean(axis=2, dtype=np.float32) for f in (cur, prev)]
-        memory.update(cur, *gray, still)
+        residual = np.abs(gray[0] - gray[1])  # "nothing moved" against the last frame
+        revealed = memory.observe(cur, gray[0], residual, camera_moved)
+        if revealed is not None:  # lowered to the residual against the memory there
+            assert (residual[revealed] < 1e-3).all()
+            assert (residual[~revealed] == np.abs(gray[0] - gray[1])[~revealed]).all()
+        memory.update(cur, *gray, standing)
         return revealed
 
     step(table, table)  # seen standing still
@@ -165,4 +170,4 @@ def test_static_memory_reveals_background_seen_again_after_it_was_covered():
     assert step(arm, back, camera_moved=True) is None
     assert not memory.known.any()
     off = StaticMemory(table.shape[:2], tolerance=0.0, covered=20.0)
-    assert off.observe(table, camera_moved=False) is None
+    assert off.observe(table, table.mean(axis=2), everywhere * 1.0, camera_moved=False) is None
