@@ -50,6 +50,7 @@ _RANGES = {
     "camera_threshold": "(0, inf)",
     "camera_min_shift": "[0, inf)",
     "camera_parallax": "(0, 1]",
+    "camera_tolerance": "[0, inf)",
     "min_cluster_nodes": "[1, inf)",
     "prior_bonus": "[0, inf)",
     "photo_weight": "[0, inf)",
@@ -151,6 +152,10 @@ class MotionBitsConfig:
     # measures better than the camera's); False = the first flow composed with H (exact
     # flows, e.g. the oracle baseline, need no second pass)
     camera_reflow: bool = True
+    # ours: the static world's model under a moving camera is good to about this many px:
+    # a new MotionBit must beat "nothing moved" with that much misalignment forgiven (grey
+    # change minus camera_tolerance x the local gradient; evidence.forgive_misalignment)
+    camera_tolerance: float = 0.5
 
     # --- pixel masks and identities (ours) ---
     min_cluster_nodes: int = 4  # clusters with fewer nodes are noise

@@ -11,6 +11,8 @@ back along the flow:
   its residual is large and the label it would inherit from the occluder is dropped);
 - :func:`motion_gain`: grey levels by which the flow explains a neighbourhood better than
   "nothing moved" (the birth test of a new MotionBit);
+- :func:`forgive_misalignment`: a residual less what a small misregistration explains
+  (the birth test under a moving camera, whose static-world model is not exact);
 - :func:`photometric_residual`: how well one parametric motion explains a box of the image
   (pixel masks, the merging test of touching MotionBits).
 """
@@ -23,7 +25,7 @@ import numpy as np
 from motionbits.flow import sample_maps
 
 __all__ = ["pull_back", "gradient_magnitude", "appearance_consistent", "motion_gain",
-           "photometric_residual", "static_residual"]
+           "forgive_misalignment", "photometric_residual", "static_residual"]
 
 #: Grey levels added before taking logs of intensities (dark pixels have noisy ratios).
 LOG_OFFSET = 8.0
@@ -107,6 +109,20 @@ def motion_gain(still: np.ndarray, cur_gray: np.ndarray, pulled: np.ndarray,
     moving bodies get ~0 too, so a birth test averages it over a whole cluster.
     """
     return cv2.blur(still - np.abs(cur_gray - pulled), (window, window))
+
+
+def forgive_misalignment(residual: np.ndarray, gradient: np.ndarray, px: float
+                         ) -> np.ndarray:
+    """(H, W) float32 ``max(residual - px * gradient, 0)``: the grey-level residual of a
+    registration less what a misalignment of up to ``px`` pixels explains on an image whose
+    gradient is ``gradient`` (grey levels per px, :func:`gradient_magnitude`).
+
+    Under a moving camera "nothing moved" compares the frame with the previous one warped
+    by the static world's model (homography + parallax), which is good to a fraction of a
+    pixel at best: on texture that alone leaves residuals of tens of grey levels, which a
+    slightly wrong flow then "explains" better -- a MotionBit born on the static world.
+    """
+    return np.maximum(residual - np.float32(px) * gradient, 0.0)
 
 
 def photometric_residual(cur: np.ndarray, prev: np.ndarray, motion: np.ndarray,

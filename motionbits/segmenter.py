@@ -18,7 +18,8 @@ from motionbits.backend import make_ops
 from motionbits.camera import compensate_camera
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
-    appearance_consistent, gradient_magnitude, motion_gain, pull_back, static_residual)
+    appearance_consistent, forgive_misalignment, gradient_magnitude, motion_gain, pull_back,
+    static_residual)
 from motionbits.flow import (FlowBackend, check_flow, forward_backward_error, make_flow,
                              sample_maps)
 from motionbits.graph import (
@@ -322,7 +323,11 @@ class MotionBitsSegmenter:
                      if cfg.relight_sigma else np.abs(cur_g - prev_g))
             # ... and where it shows the static world seen again after a body uncovered it
             revealed = self._memory.observe(cur, cur_g, still, cam is not None)
-            evidence = cache(lambda: motion_gain(still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
+            # under a moving camera a birth must beat the static world's model given its error
+            birth_still = still if cam is None else forgive_misalignment(
+                still, gradient, cfg.camera_tolerance)
+            evidence = cache(
+                lambda: motion_gain(birth_still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
                 node_cluster, motions.displacement, prior[ix[:, 1], ix[:, 0]], evidence,
