@@ -1,4 +1,5 @@
-"""Camera motion compensation (motionbits/camera.py): a shaking camera over the demo scene."""
+"""Camera motion compensation (motionbits/camera.py): a shaking camera over the demo scene,
+and births under a panning camera (davis-car-roundabout)."""
 
 import os
 from pathlib import Path
@@ -68,7 +69,8 @@ def test_shaking_camera_still_segments_the_demo_bodies():
     assert (pred[gt == 0] > 0).mean() < 0.06  # measured 0.023; 0.999 without compensation
 
 
-SHARED = Path(os.environ.get("MOTIONBITS_SHARED", Path(__file__).resolve().parents[1] / ".." / "shared"))
+SHARED = Path(os.environ.get("MOTIONBITS_SHARED",
+                             Path(__file__).resolve().parents[1] / ".." / "shared"))
 CAR = SHARED / "data" / "real" / "davis-car-roundabout"
 
 
