@@ -4,9 +4,10 @@ A MotionBit can be born where the flow moved and the world did not: in the wake 
 sweeping in front of a wall, under smeared flow beside a fast body. Such a MotionBit then
 stops, and a stopped MotionBit keeps its mask -- so it would stay for good. The test that
 tells it from a body that really moved and stopped: keep the frame before its birth, and
-the motion accumulated since (current -> that frame) both of the MotionBit and of the static world (the camera's motion; identity for a static camera).
-If the world's motion explains the MotionBit's pixels today clearly better than its own
-accumulated motion does, it never moved: it is retired.
+the motion accumulated since (current -> that frame) both of the MotionBit and of the
+static world (the camera's motion; identity for a static camera). If the world's motion
+explains the MotionBit's pixels today clearly better than its own accumulated motion does,
+it never moved: it is retired.
 """
 
 from __future__ import annotations

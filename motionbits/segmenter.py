@@ -323,11 +323,12 @@ class MotionBitsSegmenter:
                      if cfg.relight_sigma else np.abs(cur_g - prev_g))
             # ... and where it shows the static world seen again after a body uncovered it
             revealed = self._memory.observe(cur, cur_g, still, cam is not None)
-            # under a moving camera a birth must beat the static world's model given its error
-            birth_still = still if cam is None else forgive_misalignment(
-                still, gradient, cfg.camera_tolerance)
-            evidence = cache(
-                lambda: motion_gain(birth_still, cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
+            # births only (computed once, if a cluster asks); under a moving camera a birth
+            # must beat the static world's model given its error
+            evidence = cache(lambda: motion_gain(
+                still if cam is None else forgive_misalignment(still, gradient,
+                                                               cfg.camera_tolerance),
+                cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
                 node_cluster, motions.displacement, prior[ix[:, 1], ix[:, 0]], evidence,
