@@ -23,6 +23,7 @@ A static camera fits H ~ identity; below ``min_shift`` nothing is changed at all
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -30,10 +31,10 @@ from scipy import ndimage
 
 from motionbits.flow import pixel_grid, sample_maps
 from motionbits.nodes import sample_bilinear
-from motionbits.parallax import fit_epipole, parallax_field
+from motionbits.parallax import epipolar_distance, fit_epipole, parallax_field
 
 __all__ = ["dominant_homography", "compensate_flow", "world_maps", "stabilize_previous",
-           "fit_parallax", "compensate_camera"]
+           "fit_parallax", "compensate_camera", "CameraMotion"]
 
 #: A node's flow is trusted for the camera fit above this forward-backward reliability
 #: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
@@ -126,8 +127,9 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
         threshold: px, as the homography's RANSAC threshold.
 
     Returns:
-        (field, explained): the (H, W, 2) float32 parallax and the (n,) bool nodes whose
-        residual it explains; None where no parallax is found.
+        (field, explained, epipole): the (H, W, 2) float32 parallax, the (n,) bool nodes
+        whose residual it explains and the (3,) homogeneous epipole; None where no
+        parallax is found.
     """
     if support >= 1.0:
         return None
@@ -146,7 +148,8 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     h, w = flow_m.shape[:2]
     region = cv2.resize(explained.astype(np.uint8), (w, h),
                         interpolation=cv2.INTER_NEAREST) > 0
-    return parallax_field(flow_m, fit[0], region, threshold=threshold), explained.ravel()
+    return (parallax_field(flow_m, fit[0], region, threshold=threshold), explained.ravel(),
+            fit[0])
 
 
 def _reaching_border(mask: np.ndarray) -> np.ndarray:
@@ -156,13 +159,28 @@ def _reaching_border(mask: np.ndarray) -> np.ndarray:
     return np.isin(comp, edge[edge > 0])
 
 
+class CameraMotion(NamedTuple):
+    """What :func:`compensate_camera` found: the motion relative to the static world."""
+
+    #: (H, W, 2) float32 backward flow relative to the static world's model.
+    flow: np.ndarray
+    #: (H, W, 3) uint8 previous frame in the current frame's coordinates.
+    prev: np.ndarray
+    #: (n, 2) the nodes' backward targets relative to the static world.
+    back_points: np.ndarray
+    #: 3x3 camera homography (current -> previous); None: no camera motion found.
+    homography: np.ndarray | None
+    #: (n,) bool nodes whose motion left by the homography lies along their epipolar line
+    #: (within the threshold), as the static world's parallax would; None: no parallax.
+    epipolar: np.ndarray | None = None
+
+
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
                       flow_back: np.ndarray, prev: np.ndarray, *, support: float,
                       threshold: float, min_shift: float, parallax: float = 1.0,
                       grid_shape: tuple[int, int] | None = None,
                       reflow: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-                      cur: np.ndarray | None = None
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+                      cur: np.ndarray | None = None) -> CameraMotion:
     """Motion measured against the dominant (camera) motion, where there is one.
 
     Args:
@@ -188,20 +206,21 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
             camera's large ones); None: ``flow_back`` composed with the homography.
 
     Returns:
-        (flow_m, prev_m, back_m, cam): the backward flow (H, W, 2), the previous frame and
-        the nodes' backward targets (n, 2) relative to the static world (homography and
-        parallax; 0 flow where the view just entered), and the camera's 3x3 homography
-        -- ``flow_back``, ``prev``, ``back_points`` and None (the same objects) when no
-        camera motion is found.
+        :class:`CameraMotion`: the backward flow (H, W, 2), the previous frame and the
+        nodes' backward targets (n, 2) relative to the static world (homography and
+        parallax; 0 flow where the view just entered), the camera's 3x3 homography and,
+        where parallax is found, the nodes whose residual motion lies along their
+        epipolar lines -- ``flow_back``, ``prev``, ``back_points``, None, None (the same
+        objects) when no camera motion is found.
     """
     if support >= 1.0:
-        return flow_back, prev, back_points, None
+        return CameraMotion(flow_back, prev, back_points, None)
     reliable = reliability > RELIABLE
     if reliable.sum() < support * len(points) * 0.5:
-        return flow_back, prev, back_points, None
+        return CameraMotion(flow_back, prev, back_points, None)
     fit = dominant_homography(points, back_points, reliable, threshold=threshold)
     if fit is None or _shift(points, fit[0]) <= min_shift:
-        return flow_back, prev, back_points, None
+        return CameraMotion(flow_back, prev, back_points, None)
     cam, explained = fit
     if reflow is None or cur is None:
         flow_m = compensate_flow(flow_back, cam)
@@ -220,11 +239,16 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     par = None if grid_shape is None else fit_parallax(
         points, back_m - points, reliable, flow_m, grid_shape, support=parallax,
         threshold=threshold)
+    epipolar = None
     if par is not None:
         explained = explained | par[1]
+        # a residual along its epipolar line is what the static world's parallax looks
+        # like, whether or not the smooth parallax field reproduces it (a box standing on
+        # the table, the floor far below it)
+        epipolar = epipolar_distance(points, back_m - points, par[2])[0] < threshold
     # the static world's model (the homography and its parallax) must explain enough nodes
     if explained[reliable].mean() < support:
-        return flow_back, prev, back_points, None
+        return CameraMotion(flow_back, prev, back_points, None)
     par_field = None if par is None else par[0]
     maps = world_maps(cam, flow_m.shape[:2], par_field)
     prev_m = stabilize_previous(prev, cam, maps=maps)
@@ -236,4 +260,5 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     entered = ((maps[..., 0] < 0) | (maps[..., 0] > wd - 1) | (maps[..., 1] < 0)
                | (maps[..., 1] > ht - 1))
     flow_m[entered] = 0.0
-    return flow_m, prev_m, points + sample_bilinear(flow_m, points), cam
+    return CameraMotion(flow_m, prev_m, points + sample_bilinear(flow_m, points), cam,
+                        epipolar)

@@ -274,7 +274,7 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow
-            flow_m, prev_m, back_pts, cam = compensate_camera(
+            flow_m, prev_m, back_pts, cam, epipolar = compensate_camera(
                 pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
                 threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
                 parallax=cfg.camera_parallax, grid_shape=(grid.rows, grid.cols),
@@ -324,11 +324,13 @@ class MotionBitsSegmenter:
             # ... and where it shows the static world seen again after a body uncovered it
             revealed = self._memory.observe(cur, cur_g, still, cam is not None)
             # births only (computed once, if a cluster asks); under a moving camera a birth
-            # must beat the static world's model given its error
+            # must beat the static world's model given its error, and a node whose motion
+            # lies along its epipolar line (as parallax would) is no evidence of its own
             evidence = cache(lambda: motion_gain(
                 still if cam is None else forgive_misalignment(still, gradient,
                                                                cfg.camera_tolerance),
-                cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
+                cur_g, pulled, win)[ix[:, 1], ix[:, 0]] * (
+                    1.0 if epipolar is None else ~epipolar))
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
                 node_cluster, motions.displacement, prior[ix[:, 1], ix[:, 0]], evidence,

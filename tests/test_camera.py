@@ -42,7 +42,7 @@ def test_compensate_camera_recovers_a_shift_and_ignores_identity():
     assert still[3] is None and still[0] is flow and still[1] is prev  # static: untouched
     q = p + shift
     q[:40] += 6.0  # a moving body, 10% of the nodes
-    flow_m, prev_m, back_m, cam = compensate_camera(p, q, ok, flow, prev, **kw)
+    flow_m, prev_m, back_m, cam, epipolar = compensate_camera(p, q, ok, flow, prev, **kw)
     assert cam is not None and np.allclose(cam[:2, 2], shift, atol=0.05)
     assert np.abs(flow_m).max() < 0.05  # the camera's motion is gone everywhere
     assert np.abs(back_m[40:] - p[40:]).max() < 0.05

@@ -66,7 +66,7 @@ def test_parallax_field_keeps_aligned_residual_and_interpolates_the_rest():
 def test_compensation_removes_the_background_parallax_but_not_the_moving_body():
     flow, band, body = _world(0.06, np.array([0.0, 4.0]))
     off = _compensate(flow, parallax=1.0)[0]  # homography only
-    on, _, _, cam = _compensate(flow, parallax=0.1)
+    on, _, _, cam, _ = _compensate(flow, parallax=0.1)
     assert cam is not None
     inner = band.copy()
     inner[:, :6] = inner[:, -6:] = inner[:4] = False  # away from the edges
@@ -86,3 +86,19 @@ def test_a_body_moving_along_its_epipolar_line_is_not_taken_for_parallax():
     flow, _, body = _world(0.0, radial)
     on = _compensate(flow, parallax=0.1)[0]
     assert np.allclose(np.median(on[body], axis=0), radial, atol=0.3)
+
+
+def test_nodes_moving_along_their_epipolar_lines_are_flagged_as_parallax():
+    # what the segmenter's births discount: the background's parallax lines up with E,
+    # a body moving across its epipolar line (here 3.8 px off it) does not
+    flow, band, body = _world(0.06, np.array([4.0, 0.0]))
+    epipolar = _compensate(flow, parallax=0.1).epipolar
+    pts = NodeGrid.build(H, W, 24, 5).points
+    ix = np.clip(np.round(pts).astype(int), 0, [W - 1, H - 1])
+    on_band = band[ix[:, 1], ix[:, 0]] & (pts[:, 1] < 26)
+    on_body = body[ix[:, 1], ix[:, 0]]
+    assert on_body.sum() >= 4 and on_band.sum() >= 20
+    assert epipolar[on_band].all()
+    assert not epipolar[on_body].any()
+    # no parallax (a pure shift of the plane): nothing to flag
+    assert _compensate(_world(0.0, np.array([4.0, 0.0]))[0], parallax=0.1).epipolar is None
