@@ -646,6 +646,10 @@ CASES: list[Case] = [
         lambda p: np.zeros((*p.shape[:2], 2), np.float64)))), CORRECT, check=lambda o, t: len(o.value) == 3),
     Case("api/frame-8x4000", api(lambda t: _segment([np.zeros((8, 4000, 3), np.uint8)] * 2)), CLEAR, "20 px"),
     Case("api/frame-nan-float", api(lambda t: _segment([np.full((64, 64, 3), np.nan)])), CLEAR, "uint8"),
+    Case("api/frame-float-0-255", api(lambda t: _segment([_F[0].astype(np.float64)])), CLEAR,
+         "np.clip(img, 0, 255)"),  # not the [0, 1] recipe, which would turn it white
+    Case("api/frame-float-nan-hint", api(lambda t: _segment([np.full((64, 64, 3), np.nan, np.float32)])), CLEAR,
+         "NaN"),
     Case("api/frame-uint16-scaled", api(lambda t: __import__("motionbits.video").video.as_rgb_frame(
         np.dstack([_GRAD16] * 3))), CORRECT, check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
     Case("api/frame-wrong-shape", api(lambda t: _segment([np.zeros((64, 64, 2), np.uint8)])), CLEAR, "shape"),
