@@ -656,6 +656,12 @@ CASES: list[Case] = [
     Case("api/frame-none", api(lambda t: _segment([None])), CLEAR, "numpy array"),
     Case("api/size-change", api(lambda t: _segment([_F[0], _F[1][:100]], _small_config())), CLEAR, "call reset()"),
     Case("api/segment-video-every-0", api(lambda t: list(__import__("motionbits").segment_video(_F, every=0))), CLEAR, "every"),
+    Case("api/segment-video-every-float", api(lambda t: list(__import__("motionbits").segment_video(_F, every=1.5))),
+         CLEAR, "every"),  # was: frames 0, 3, 6, ... kept by i % 1.5 == 0
+    Case("api/segment-video-every-str", api(lambda t: list(__import__("motionbits").segment_video(_F, every="2"))),
+         CLEAR, "every"),
+    Case("api/iter-frames-bytes-path", api(lambda t: list(__import__("motionbits.video").video.iter_frames(
+        str(t / "x.mp4").encode()))), CLEAR, "os.fsdecode"),
     Case("api/iter-frames-int", api(lambda t: list(__import__("motionbits.video").video.iter_frames(123))), CLEAR, "unsupported"),
     Case("api/read-image-16bit", api(lambda t: (Image.fromarray(_GRAD16).save(t / "g.png"),
                                                __import__("motionbits.video").video.read_image(t / "g.png"))[1]),
