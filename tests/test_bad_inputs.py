@@ -141,6 +141,14 @@ def build_assets(root: Path) -> Path:
     scene = root / "data" / "robot" / "scene_0000"
     _write_frames(scene / "frames", frames)
     Image.fromarray(clip.gt.astype(np.uint16)).save(scene / "gt.png")
+    # ... whose gt.png is not the frames' size, or whose frames differ in size
+    bad = root / "data_bad_gt" / "robot" / "scene_0000"
+    _write_frames(bad / "frames", frames[:3])
+    Image.fromarray(clip.gt[:60].astype(np.uint16)).save(bad / "gt.png")
+    bad = root / "data_mixed_frames" / "robot" / "scene_0000"
+    _write_frames(bad / "frames", frames[:3])
+    Image.fromarray(_clip(1, (100, 160)).frames[0]).save(bad / "frames" / "00001.png")
+    Image.fromarray(clip.gt.astype(np.uint16)).save(bad / "gt.png")
     pred = root / "pred" / "robot"
     pred.mkdir(parents=True)
     Image.fromarray(clip.gt.astype(np.uint16)).save(pred / "scene_0000.png")
@@ -605,6 +613,10 @@ CASES: list[Case] = [
     Case("benchmark/no-data", cli("benchmark"), CLEAR, "--data"),
     Case("benchmark/data-missing", cli("benchmark", "--data", "{t}/nope", "--methods", "flow-cc"), CLEAR, "nope"),
     Case("benchmark/data-not-moribo", cli("benchmark", "--data", "{a}/frames", "--methods", "flow-cc"), CLEAR, "no MoRiBo scene"),
+    Case("benchmark/gt-wrong-size", cli("benchmark", "--data", "{a}/data_bad_gt", "--methods", "flow-cc", "--quiet"),
+         CLEAR, "gt.png is 160x60 but the frames are 160x120"),  # was: blamed the method
+    Case("benchmark/frames-mixed-sizes", cli("benchmark", "--data", "{a}/data_mixed_frames", "--methods", "flow-cc",
+                                             "--quiet"), CLEAR, "frame 00001.png is 160x100"),  # was: no scene named
     Case("benchmark/unknown-method", cli("benchmark", "--data", "{a}/data", "--methods", "magic"), CLEAR, "unknown method"),
     Case("benchmark/json-is-a-folder", prepared(lambda t: (t / "j").mkdir(), cli(
         "benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--json", "{t}/j")), CLEAR, "is a folder"),
