@@ -711,6 +711,14 @@ CASES: list[Case] = [
     Case("somprompt/parse-5-digit-list", api(lambda t: _parse("objects 3, 12345 and 5", _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3, 5] and o.value.unknown == ["12345"]),
     Case("somprompt/parse-none", api(lambda t: _parse(None)), CLEAR, "str"),
+    Case("somprompt/parse-5000-digit-mark", api(lambda t: _parse("[" + "9" * 5000 + "] and [3]", _LAB)), CORRECT,
+         check=lambda o, t: o.value.ids == [3] and o.value.unknown == ["9" * 5000]),  # was: int() digit limit
+    Case("somprompt/parse-5000-digit-no-labels", api(lambda t: _parse("mark 0" + "7" * 5000)), CORRECT,
+         check=lambda o, t: o.value.ids == [] and o.value.unknown == ["7" * 5000]),  # beyond int64: no mark
+    Case("somprompt/parse-marks-int", api(lambda t: _parse("[3]", marks=3)), CLEAR, "marks must be"),
+    Case("somprompt/parse-marks-str", api(lambda t: _parse("[3]", marks="35")), CLEAR, "marks must be"),  # was: {3, 5}
+    Case("somprompt/parse-marks-none-id", api(lambda t: _parse("[3]", marks=[3, None])), CLEAR, "integer object ids"),
+    Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),
     Case("somprompt/parse-unicode", api(lambda t: _parse("Der Becher [5] — 移动了 ✓", _LAB)), CORRECT,
