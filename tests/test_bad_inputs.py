@@ -578,6 +578,8 @@ CASES: list[Case] = [
     Case("synth/size-too-small", cli("synth", "--track", "robot", "--out", "{t}/s", "--size", "16x16"), CLEAR, "too small", absent=("s",)),
     Case("synth/scenes-0", cli("synth", "--track", "robot", "--out", "{t}/s", "--scenes", "0"), CLEAR, "--scenes", absent=("s",)),
     Case("synth/frames-1", cli("synth", "--track", "robot", "--out", "{t}/s", "--frames", "1"), CLEAR, "--frames", absent=("s",)),
+    Case("synth/seed-negative", cli("synth", "--track", "robot", "--out", "{t}/s", "--seed", "-1", "--scenes", "1",
+                                    "--frames", "2", "--size", "64x48", "--quiet"), CLEAR, "--seed", absent=("s",)),
     Case("synth/track-unknown", cli("synth", "--track", "car", "--out", "{t}/s"), CLEAR, "--track", absent=("s",)),
     Case("synth/track-not-empty", prepared(robot_track_with_thesis, cli(
         "synth", "--track", "robot", "--out", "{t}/d")), CLEAR, "--overwrite",
