@@ -48,10 +48,7 @@ def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
             f"{name} must be an (H, W, 3) uint8 RGB numpy array or a PIL image, got {type(frame).__name__}"
         )
     if frame.dtype != np.uint8:
-        hint = (
-            "; convert floats in [0, 1] with np.clip(img * 255, 0, 255).astype(np.uint8)"
-            if np.issubdtype(frame.dtype, np.floating) else ""
-        )
+        hint = _float_hint(frame) if np.issubdtype(frame.dtype, np.floating) else ""
         raise TypeError(f"{name} must be uint8 RGB, got dtype {frame.dtype}{hint}")
     if frame.ndim == 3 and frame.shape[2] == 1:
         frame = frame[..., 0]
@@ -67,6 +64,17 @@ def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
     if frame.shape[0] == 0 or frame.shape[1] == 0:
         raise ValueError(f"{name} is empty: shape {frame.shape}")
     return np.ascontiguousarray(frame)
+
+
+def _float_hint(frame: np.ndarray) -> str:
+    """How to convert a float frame to uint8, from its values: the [0, 1] recipe would turn
+    a frame in [0, 255] white, and neither recipe is defined for NaN or infinity."""
+    if frame.size and not np.isfinite(frame).all():
+        return "; it also holds NaN or infinite values: replace them first (e.g. np.nan_to_num)"
+    if frame.size and frame.max() > 1:
+        return (f"; its values reach {frame.max():g}: if they are in [0, 255], convert with "
+                "np.clip(img, 0, 255).astype(np.uint8)")
+    return "; convert floats in [0, 1] with np.clip(img * 255, 0, 255).astype(np.uint8)"
 
 
 def sample_frame_indices(num_total: int, num_frames: int | None) -> list[int]:

@@ -424,7 +424,13 @@ def segment_video(source: FrameSource, config: MotionBitsConfig | None = None, *
         flow: optional flow backend.
         every: process every ``every``-th frame (temporal subsampling); ``frame_index`` of
             each result counts processed frames.
+
+    Raises:
+        TypeError: ``every`` is not an int.
+        ValueError: ``every`` < 1.
     """
+    if isinstance(every, bool) or not isinstance(every, (int, np.integer)):
+        raise TypeError(f"every must be an int >= 1, got {type(every).__name__} {every!r}")
     if every < 1:
         raise ValueError(f"every must be >= 1, got {every}")
     seg = MotionBitsSegmenter(config, flow=flow)

@@ -113,6 +113,9 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
         ValueError: the video or folder holds no readable frame, or a frame is malformed.
         TypeError: the source or a frame has the wrong type.
     """
+    if isinstance(source, (bytes, bytearray)):  # else read as an iterable of ints
+        raise TypeError(f"a path must be a str or pathlib.Path, got {type(source).__name__} "
+                        f"{bytes(source)[:80]!r}; decode it with os.fsdecode(path)")
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
         if not path.exists():

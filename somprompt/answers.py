@@ -150,8 +150,15 @@ def find_citations(answer: str, style: MarkStyle = "number") -> list[tuple[str, 
                 if style == "letter" and (word.lower() in _SEP_WORDS or _KW_WORDS.match(word)):
                     continue
                 span = (g_start + tok.start(), g_start + tok.end())
-                spans.setdefault(span, word.lower() if style == "letter" else str(int(word)))
+                spans.setdefault(span, word.lower() if style == "letter" else _number_text(word))
     return [(text, s, e) for (s, e), text in sorted(spans.items())]
+
+
+def _number_text(word: str) -> str:
+    """A number token in ASCII digits without leading zeros (``"007"`` -> ``"7"``, the
+    Arabic-Indic ``"\u0663"`` -> ``"3"``), digit by digit: ``int(word)`` refuses a token of
+    more than 4300 digits (Python's limit on converting long digit strings)."""
+    return "".join(str(int(c)) for c in word).lstrip("0") or "0"
 
 
 def _looks_like_year(text: str) -> bool:
@@ -177,6 +184,9 @@ def parse_answer(
     Returns:
         :class:`ParsedAnswer`.
 
+    Raises:
+        TypeError: ``answer`` is not a str (e.g. None), or ``marks`` is not one of the above.
+
     Example:
         >>> import numpy as np
         >>> labels = np.zeros((4, 4), int); labels[0, 0] = 3; labels[3, 3] = 5
@@ -197,7 +207,7 @@ def parse_answer(
         lookup = marks.id_for_text
     else:
         if marks is not None:
-            known = {int(i) for i in marks}
+            known = _known_ids(marks)
         elif present is not None:
             known = present
         else:
@@ -213,7 +223,7 @@ def parse_answer(
     for text, start, end in find_citations(answer, style):
         obj_id = lookup(text)
         if obj_id is None:
-            if style == "number" and (int(text) == 0 or _looks_like_year(text)):
+            if style == "number" and (text == "0" or _looks_like_year(text)):
                 continue  # "[0]" is no mark; "(2024)" is a year
             if text not in unknown:
                 unknown.append(text)
@@ -228,6 +238,21 @@ def parse_answer(
         missing = [i for i in ids if i not in masks]
     return ParsedAnswer(answer, ids, unknown, citations, masks, missing,
                         None if lm is None else lm.shape)
+
+
+def _known_ids(marks: Iterable[int]) -> set[int]:
+    """The object ids of ``parse_answer``'s ``marks`` (whole numbers; numpy's too)."""
+    if isinstance(marks, (str, bytes)) or not isinstance(marks, Iterable):
+        raise TypeError("marks must be a MarkRegistry, an iterable of object ids or None, "
+                        f"got {type(marks).__name__} {marks!r:.40}")
+    known = set()
+    for i in marks:
+        whole = isinstance(i, (int, np.integer)) or (
+            isinstance(i, (float, np.floating)) and float(i).is_integer())
+        if isinstance(i, bool) or not whole:
+            raise TypeError(f"marks must hold integer object ids, got {type(i).__name__} {i!r:.40}")
+        known.add(int(i))
+    return known
 
 
 def masks_for_ids(labels: np.ndarray, ids: Iterable[int]) -> dict[int, np.ndarray]:

@@ -37,11 +37,25 @@ def mark_text(number: int, style: MarkStyle = "number") -> str:
     raise ValueError(f"unknown mark style {style!r}; use one of {_STYLES}")
 
 
+#: Largest mark number: an id beyond int64 is in no label map.
+_MAX_NUMBER = 2**63 - 1
+
+
 def parse_mark_text(text: str, style: MarkStyle = "number") -> int | None:
-    """Inverse of :func:`mark_text`; ``None`` if ``text`` is not a mark of that style."""
+    """Inverse of :func:`mark_text`; ``None`` if ``text`` is not a mark of that style
+    (numbers beyond the int64 range, which no label map holds, included).
+
+    Raises:
+        TypeError: ``text`` is not a str.
+    """
+    if not isinstance(text, str):
+        raise TypeError(f"mark text must be a str, got {type(text).__name__}")
     text = text.strip()
     if style == "number":
-        return int(text) if text.isdigit() and text.isascii() and int(text) > 0 else None
+        if not (text.isdigit() and text.isascii()):
+            return None
+        text = text.lstrip("0")  # the length test spares int() a number of 5000 digits
+        return int(text) if text and len(text) <= 19 and int(text) <= _MAX_NUMBER else None
     if style == "letter":
         t = text.lower()
         if not t or not t.isascii() or not t.isalpha():

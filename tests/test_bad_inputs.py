@@ -141,6 +141,14 @@ def build_assets(root: Path) -> Path:
     scene = root / "data" / "robot" / "scene_0000"
     _write_frames(scene / "frames", frames)
     Image.fromarray(clip.gt.astype(np.uint16)).save(scene / "gt.png")
+    # ... whose gt.png is not the frames' size, or whose frames differ in size
+    bad = root / "data_bad_gt" / "robot" / "scene_0000"
+    _write_frames(bad / "frames", frames[:3])
+    Image.fromarray(clip.gt[:60].astype(np.uint16)).save(bad / "gt.png")
+    bad = root / "data_mixed_frames" / "robot" / "scene_0000"
+    _write_frames(bad / "frames", frames[:3])
+    Image.fromarray(_clip(1, (100, 160)).frames[0]).save(bad / "frames" / "00001.png")
+    Image.fromarray(clip.gt.astype(np.uint16)).save(bad / "gt.png")
     pred = root / "pred" / "robot"
     pred.mkdir(parents=True)
     Image.fromarray(clip.gt.astype(np.uint16)).save(pred / "scene_0000.png")
@@ -570,6 +578,8 @@ CASES: list[Case] = [
     Case("synth/size-too-small", cli("synth", "--track", "robot", "--out", "{t}/s", "--size", "16x16"), CLEAR, "too small", absent=("s",)),
     Case("synth/scenes-0", cli("synth", "--track", "robot", "--out", "{t}/s", "--scenes", "0"), CLEAR, "--scenes", absent=("s",)),
     Case("synth/frames-1", cli("synth", "--track", "robot", "--out", "{t}/s", "--frames", "1"), CLEAR, "--frames", absent=("s",)),
+    Case("synth/seed-negative", cli("synth", "--track", "robot", "--out", "{t}/s", "--seed", "-1", "--scenes", "1",
+                                    "--frames", "2", "--size", "64x48", "--quiet"), CLEAR, "--seed", absent=("s",)),
     Case("synth/track-unknown", cli("synth", "--track", "car", "--out", "{t}/s"), CLEAR, "--track", absent=("s",)),
     Case("synth/track-not-empty", prepared(robot_track_with_thesis, cli(
         "synth", "--track", "robot", "--out", "{t}/d")), CLEAR, "--overwrite",
@@ -605,6 +615,10 @@ CASES: list[Case] = [
     Case("benchmark/no-data", cli("benchmark"), CLEAR, "--data"),
     Case("benchmark/data-missing", cli("benchmark", "--data", "{t}/nope", "--methods", "flow-cc"), CLEAR, "nope"),
     Case("benchmark/data-not-moribo", cli("benchmark", "--data", "{a}/frames", "--methods", "flow-cc"), CLEAR, "no MoRiBo scene"),
+    Case("benchmark/gt-wrong-size", cli("benchmark", "--data", "{a}/data_bad_gt", "--methods", "flow-cc", "--quiet"),
+         CLEAR, "gt.png is 160x60 but the frames are 160x120"),  # was: blamed the method
+    Case("benchmark/frames-mixed-sizes", cli("benchmark", "--data", "{a}/data_mixed_frames", "--methods", "flow-cc",
+                                             "--quiet"), CLEAR, "frame 00001.png is 160x100"),  # was: no scene named
     Case("benchmark/unknown-method", cli("benchmark", "--data", "{a}/data", "--methods", "magic"), CLEAR, "unknown method"),
     Case("benchmark/json-is-a-folder", prepared(lambda t: (t / "j").mkdir(), cli(
         "benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--json", "{t}/j")), CLEAR, "is a folder"),
@@ -646,12 +660,22 @@ CASES: list[Case] = [
         lambda p: np.zeros((*p.shape[:2], 2), np.float64)))), CORRECT, check=lambda o, t: len(o.value) == 3),
     Case("api/frame-8x4000", api(lambda t: _segment([np.zeros((8, 4000, 3), np.uint8)] * 2)), CLEAR, "20 px"),
     Case("api/frame-nan-float", api(lambda t: _segment([np.full((64, 64, 3), np.nan)])), CLEAR, "uint8"),
+    Case("api/frame-float-0-255", api(lambda t: _segment([_F[0].astype(np.float64)])), CLEAR,
+         "np.clip(img, 0, 255)"),  # not the [0, 1] recipe, which would turn it white
+    Case("api/frame-float-nan-hint", api(lambda t: _segment([np.full((64, 64, 3), np.nan, np.float32)])), CLEAR,
+         "NaN"),
     Case("api/frame-uint16-scaled", api(lambda t: __import__("motionbits.video").video.as_rgb_frame(
         np.dstack([_GRAD16] * 3))), CORRECT, check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
     Case("api/frame-wrong-shape", api(lambda t: _segment([np.zeros((64, 64, 2), np.uint8)])), CLEAR, "shape"),
     Case("api/frame-none", api(lambda t: _segment([None])), CLEAR, "numpy array"),
     Case("api/size-change", api(lambda t: _segment([_F[0], _F[1][:100]], _small_config())), CLEAR, "call reset()"),
     Case("api/segment-video-every-0", api(lambda t: list(__import__("motionbits").segment_video(_F, every=0))), CLEAR, "every"),
+    Case("api/segment-video-every-float", api(lambda t: list(__import__("motionbits").segment_video(_F, every=1.5))),
+         CLEAR, "every"),  # was: frames 0, 3, 6, ... kept by i % 1.5 == 0
+    Case("api/segment-video-every-str", api(lambda t: list(__import__("motionbits").segment_video(_F, every="2"))),
+         CLEAR, "every"),
+    Case("api/iter-frames-bytes-path", api(lambda t: list(__import__("motionbits.video").video.iter_frames(
+        str(t / "x.mp4").encode()))), CLEAR, "os.fsdecode"),
     Case("api/iter-frames-int", api(lambda t: list(__import__("motionbits.video").video.iter_frames(123))), CLEAR, "unsupported"),
     Case("api/read-image-16bit", api(lambda t: (Image.fromarray(_GRAD16).save(t / "g.png"),
                                                __import__("motionbits.video").video.read_image(t / "g.png"))[1]),
@@ -689,6 +713,14 @@ CASES: list[Case] = [
     Case("somprompt/parse-5-digit-list", api(lambda t: _parse("objects 3, 12345 and 5", _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3, 5] and o.value.unknown == ["12345"]),
     Case("somprompt/parse-none", api(lambda t: _parse(None)), CLEAR, "str"),
+    Case("somprompt/parse-5000-digit-mark", api(lambda t: _parse("[" + "9" * 5000 + "] and [3]", _LAB)), CORRECT,
+         check=lambda o, t: o.value.ids == [3] and o.value.unknown == ["9" * 5000]),  # was: int() digit limit
+    Case("somprompt/parse-5000-digit-no-labels", api(lambda t: _parse("mark 0" + "7" * 5000)), CORRECT,
+         check=lambda o, t: o.value.ids == [] and o.value.unknown == ["7" * 5000]),  # beyond int64: no mark
+    Case("somprompt/parse-marks-int", api(lambda t: _parse("[3]", marks=3)), CLEAR, "marks must be"),
+    Case("somprompt/parse-marks-str", api(lambda t: _parse("[3]", marks="35")), CLEAR, "marks must be"),  # was: {3, 5}
+    Case("somprompt/parse-marks-none-id", api(lambda t: _parse("[3]", marks=[3, None])), CLEAR, "integer object ids"),
+    Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),
     Case("somprompt/parse-unicode", api(lambda t: _parse("Der Becher [5] — 移动了 ✓", _LAB)), CORRECT,

@@ -135,7 +135,7 @@ def _scaling(rows: list[tuple[str, MotionBitsConfig, tuple[int, int]]], frames: 
 def _compare_on_data(data: str, max_scenes: int | None, config: MotionBitsConfig) -> None:
     from motionbits.eval import adjusted_rand_index as ari
     from motionbits.eval import evaluate_frame, summarize
-    from motionbits.eval.dataset import discover_scenes, load_frames, load_ground_truth
+    from motionbits.eval.dataset import discover_scenes, load_scene
 
     scenes = discover_scenes(data, max_scenes)
     print(f"\nfast vs exact on {len(scenes)} scenes of {data} (final frame)")
@@ -143,8 +143,7 @@ def _compare_on_data(data: str, max_scenes: int | None, config: MotionBitsConfig
     aris, scores = [], {"fast": [], "exact": []}
     ms = {"fast": [], "exact": []}
     for scene in scenes:
-        frames = load_frames(scene)
-        gt, ignore = load_ground_truth(scene)
+        frames, gt, ignore = load_scene(scene)
         runs = {"fast": time_clip(frames, config),
                 "exact": time_clip(frames, config.with_(exact=True))}
         for k, t in runs.items():

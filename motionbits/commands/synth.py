@@ -68,6 +68,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--scenes must be at least 1")
     if args.frames is not None and args.frames < 2:
         raise InputError("--frames must be at least 2")
+    if args.seed < 0:  # numpy's seed sequence refuses it ("expected non-negative integer")
+        raise InputError(f"--seed must be >= 0, got {args.seed}")
     from motionbits.synth.mujoco_backend import import_mujoco
     from motionbits.synth.mujoco_moribo import generate_track
 

@@ -16,7 +16,7 @@ import numpy as np
 from tqdm import tqdm
 
 from motionbits.eval.dataset import (
-    discover_scenes, load_frames, load_ground_truth, summarize_tracks,
+    discover_scenes, load_scene, summarize_tracks,
 )
 from motionbits.eval.labelmaps import write_label_map
 from motionbits.eval.metrics import FrameScores, evaluate_frame
@@ -50,7 +50,8 @@ def run_benchmark(
         dropped with a warning on stderr instead of stopping the run.
 
     Raises:
-        ValueError: a method returned a label map of the wrong shape (names the scene).
+        ValueError: a scene's frames differ in size or from gt.png's, or a method returned
+            a label map of the wrong shape (names the scene).
     """
     if not methods:
         raise ValueError("no method to run")
@@ -61,8 +62,7 @@ def run_benchmark(
     unavailable: dict[str, str] = {}
     n_frames = 0
     for scene in tqdm(scenes, desc="benchmark", unit="scene", disable=not progress):
-        frames = load_frames(scene)
-        gt, ignore = load_ground_truth(scene)
+        frames, gt, ignore = load_scene(scene)  # the frames and gt.png fit together
         n_frames += len(frames)
         for name, method in methods.items():
             if name in unavailable:

@@ -29,6 +29,7 @@ from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_
 
 __all__ = [
     "Scene", "discover_scenes", "is_scene", "scene_frames", "load_frames", "load_ground_truth",
+    "load_scene",
     "find_prediction", "read_prediction", "evaluate_dataset", "average_blocks", "summarize_tracks",
 ]
 
@@ -140,6 +141,35 @@ def load_ground_truth(scene: Scene | Path) -> tuple[np.ndarray, np.ndarray | Non
         if ignore.shape != gt.shape:
             raise ValueError(f"{path}/ignore.png is {ignore.shape}, gt.png is {gt.shape}")
     return gt, ignore
+
+
+def load_scene(scene: Scene | Path) -> tuple[list[np.ndarray], np.ndarray, np.ndarray | None]:
+    """The frames and ground truth of a scene, checked to fit together (for running
+    methods on it: a method predicts at the frames' size).
+
+    Returns:
+        ``(frames, gt, ignore)``: the (H, W, 3) uint8 frames (:func:`load_frames`) and
+        :func:`load_ground_truth`'s (H, W) maps.
+
+    Raises:
+        FileNotFoundError: no gt.png or no frames/.
+        ValueError: the frames differ in size, or gt.png is not the frames' size.
+    """
+    from motionbits.video import read_image
+
+    path = scene.path if isinstance(scene, Scene) else Path(scene)
+    files = scene_frames(path)
+    frames = [read_image(f) for f in files]
+    h, w = frames[0].shape[:2]
+    for f, frame in zip(files, frames):
+        if frame.shape[:2] != (h, w):
+            raise ValueError(f"scene {path}: frame {f.name} is {frame.shape[1]}x{frame.shape[0]} "
+                             f"but {files[0].name} is {w}x{h}; the frames of a scene share one size")
+    gt, ignore = load_ground_truth(path)
+    if gt.shape != (h, w):
+        raise ValueError(f"scene {path}: gt.png is {gt.shape[1]}x{gt.shape[0]} but the frames are "
+                         f"{w}x{h}; gt.png must be the last frame's label map at the frames' size")
+    return frames, gt, ignore
 
 
 def find_prediction(pred_root: str | os.PathLike, scene: Scene) -> Path | None:
