@@ -155,11 +155,9 @@ def load_scene(scene: Scene | Path) -> tuple[list[np.ndarray], np.ndarray, np.nd
         FileNotFoundError: no gt.png or no frames/.
         ValueError: the frames differ in size, or gt.png is not the frames' size.
     """
-    from motionbits.video import read_image
-
     path = scene.path if isinstance(scene, Scene) else Path(scene)
     files = scene_frames(path)
-    frames = [read_image(f) for f in files]
+    frames = load_frames(path)
     h, w = frames[0].shape[:2]
     for f, frame in zip(files, frames):
         if frame.shape[:2] != (h, w):
