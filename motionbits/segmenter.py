@@ -159,7 +159,7 @@ class MotionBitsSegmenter:
         hw, ww = self._work_size = (int(round(h * scale)), int(round(w * scale)))
         if min(hw, ww) < MIN_WORK_SIDE:
             raise ValueError(
-                f"frame {self.frame_index} is {w}x{h}: at max_side={self.config.max_side} it is "
+                f"frame {self.frame_index + 1} is {w}x{h}: at max_side={self.config.max_side} it is "
                 f"processed at {ww}x{hw}, but both sides need at least {MIN_WORK_SIDE} px for "
                 "the optical flow; crop it or raise max_side")
         self._input_size = (h, w)
@@ -228,9 +228,9 @@ class MotionBitsSegmenter:
                 f"frame {self.frame_index + 1} is {frame.shape[1]}x{frame.shape[0]} but the stream "
                 f"started at {self._input_size[1]}x{self._input_size[0]}; call reset() for a new video"
             )
-        self.frame_index += 1
         if self._input_size is None:
-            self._start(frame)
+            self._start(frame)  # raises for a frame too small, before the stream counts it
+        self.frame_index += 1
         with self._stage("resize"):
             cur = self._to_work(frame)
         if self._prev is None:

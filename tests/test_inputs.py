@@ -69,6 +69,13 @@ def test_size_change_mid_stream():
         seg.update(np.zeros((64, 80, 3), np.uint8))
 
 
+def test_a_refused_first_frame_is_not_counted():
+    seg = MotionBitsSegmenter(SMALL)
+    with pytest.raises(ValueError, match="frame 0 is 4000x8"):
+        seg.update(np.zeros((8, 4000, 3), np.uint8))
+    assert seg.update(np.zeros((64, 64, 3), np.uint8)).frame_index == 0  # a new first frame
+
+
 def test_grayscale_is_converted(tiny):
     gray = tiny.frames.mean(axis=3).astype(np.uint8)
     res = list(segment_video(gray, SMALL))
