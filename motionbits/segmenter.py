@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from motionbits.aperture import join_flat_regions
 from motionbits.backend import make_ops
 from motionbits.camera import compensate_camera
 from motionbits.config import MotionBitsConfig
@@ -131,6 +132,7 @@ class MotionBitsSegmenter:
         self._temporal: TemporalState | None = None
         self._earned: np.ndarray | None = None  # (h, w) int32 evidence of the labels (masks)
         self._still: np.ndarray | None = None  # (h, w) int32 pixels seen standing still
+        self._joined: np.ndarray | None = None  # (h, w) int32 flat links joined (aperture.py)
         self._memory: StaticMemory | None = None  # the static world's look (revealed.py)
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
@@ -169,6 +171,7 @@ class MotionBitsSegmenter:
         self._temporal = TemporalState((hw, ww), self._grid.neighbors.shape, self.config.window)
         self._earned = np.zeros((hw, ww), np.int32)  # 1 = its MotionBit showed there
         self._still = np.zeros((hw, ww), np.int32)  # 1 = seen standing still (merging)
+        self._joined = np.zeros((hw, ww), np.int32)  # id of the shown mask that joined it
         self._memory = StaticMemory((hw, ww), self.config.reveal_tolerance,
                                     self.config.reveal_covered)
         self._noise_cov = twist_noise_covariance(self._grid.points, self._grid.neighbors,
@@ -260,8 +263,8 @@ class MotionBitsSegmenter:
             prior_valid = (fb_err < cfg.fb_sigma) & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
-            (prior, earned, still_seen), history = self._temporal.carry(
-                [self._labels, self._earned, self._still], flow_back, back_maps)
+            (prior, earned, still_seen, joined), history = self._temporal.carry(
+                [self._labels, self._earned, self._still, self._joined], flow_back, back_maps)
             earned = earned > 0
 
         with self._stage("twists"):
@@ -399,9 +402,14 @@ class MotionBitsSegmenter:
             source = twist_sources(node_ids, ids, rep)
             thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
                                                   moving & set(source.values()))
-            # the masks shown (one per group) are trimmed to the image's edges; the state
-            # keeps the motion's masks (trimming them would compound from frame to frame)
-            shown = snap_to_edges(group_map(labels, rep), cur,
+            # the masks shown (one per group) take the flat links that move along
+            # themselves and are trimmed to the image's edges; the state keeps the motion's
+            # masks (trimming them would compound from frame to frame)
+            with_links = join_flat_regions(
+                labels, ids, thetas, trans, cur, cur_g, prev_g, still, flow_m, joined,
+                move_threshold=cfg.move_threshold, min_area=int(np.ceil(SPECK_CELLS * cw * ch)))
+            self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
+            shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)

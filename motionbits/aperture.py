@@ -1,0 +1,137 @@
+"""Flat links that move along themselves: the aperture problem in the shown masks (ours).
+
+A long flat-coloured part of a body that moves along its own length -- a robot's arm
+entering the view from the border -- shows no motion of its own: its edges run along the
+motion and its inside has no texture, so "nothing moved" explains it as well as the body's
+motion does, no MotionBit is born there and the pixel masks leave it to the background.
+A shown MotionBit is therefore extended over a flat image region (colour gradient under
+``FLAT_GRADIENT``) that
+
+- touches the MotionBit's mask and reaches the image border (a link entering the view: a
+  flat region inside the view is closed by edges across the motion, which the motion
+  moves, and a table or wall around a body is mostly static);
+- moves by the flow (more than ``move_threshold``) over ``MOVING_SHARE`` of its area;
+- shows no visible change (``STILL_LEVELS``), yet the MotionBit's motion explains it and a
+  band around it (its own edges) better than "nothing moved" by ``GAIN`` grey levels.
+
+Once joined it stays joined -- also when the body stops -- while it touches the MotionBit
+and the motion explains it no worse than "nothing moved" by ``KEEP_TOLERANCE``. Only the
+masks shown are extended: the segmenter's state keeps the motion's masks (a joined region
+fed back into the clustering came back as a MotionBit of its own and split the body).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motionbits.evidence import photometric_residual
+from motionbits.twists import rigid_matrix
+
+__all__ = ["flat_regions", "join_flat_regions", "FLAT_GRADIENT", "MOVING_SHARE",
+           "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE"]
+
+#: grey levels per px: a pixel whose colour gradient (largest over R, G, B) is below this
+#: is flat.
+FLAT_GRADIENT = 6.0
+#: share of a flat region whose flow must move for it to join a MotionBit ...
+MOVING_SHARE = 0.7
+#: ... grey levels (3x3 mean, over the region and its band): "nothing moved" misses it by
+#: less than this (no visible change) ...
+STILL_LEVELS = 4.0
+#: ... and the MotionBit's motion explains it better than "nothing moved" by this much.
+GAIN = 0.5
+#: grey levels: a region joined at the last frame stays while the motion explains it no
+#: worse than "nothing moved" by this much.
+KEEP_TOLERANCE = 1.0
+#: px: the band around a region whose edges the motion must explain too ...
+BAND = 3
+#: ... and the reach within which a region touches a mask and takes the edge pixels
+#: around it.
+REACH = 2
+#: A region joined at the last frame is the same region if it holds this share of it.
+KEPT_SHARE = 0.5
+
+
+def flat_regions(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Connected regions of flat colour.
+
+    Args:
+        rgb: (H, W, 3) uint8 frame.
+
+    Returns:
+        (flat, regions, stats): (H, W) bool flat pixels, (H, W) int32 region of each pixel
+        (0 = not flat) and the (n, 5) ``cv2.connectedComponentsWithStats`` stats (x, y,
+        width, height, area) of each region (row 0: the pixels that are not flat).
+    """
+    smooth = cv2.GaussianBlur(rgb, (0, 0), 1.0).astype(np.float32)
+    gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)
+    grad = cv2.magnitude(gx, gy)  # a 3x3 Sobel reads 8x the grey levels per px of a ramp
+    grad = cv2.max(cv2.max(grad[..., 0], grad[..., 1]), grad[..., 2])  # (numpy's max
+    flat = grad < 8 * FLAT_GRADIENT  # along the last axis is 20x slower)
+    _, regions, stats, _ = cv2.connectedComponentsWithStats(flat.astype(np.uint8),
+                                                            connectivity=4)
+    return flat, regions, stats
+
+
+def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
+                      trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
+                      prev_gray: np.ndarray, still: np.ndarray, flow_back: np.ndarray,
+                      joined: np.ndarray, *, move_threshold: float, min_area: int
+                      ) -> np.ndarray:
+    """The label map with flat links that move along themselves joined to their MotionBit.
+
+    Args:
+        labels: (H, W) int32 label map (0 = background).
+        ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,), ``trans``
+            (K, 2) (current -> previous, relative to the camera).
+        rgb: (H, W, 3) uint8 current frame.
+        cur_gray, prev_gray: (H, W) float32 grey frames (``prev_gray`` camera-stabilised).
+        still: (H, W) float32 grey levels by which "nothing moved" misses each pixel.
+        flow_back: (H, W, 2) float32 backward flow relative to the camera.
+        joined: (H, W) int32 pixels joined at the last frame (their id), carried to this one.
+        move_threshold: px; a pixel's flow moves above this.
+        min_area: px; smaller regions never join.
+
+    Returns:
+        (H, W) int32 label map: ``labels`` plus the joined regions (only background
+        pixels change).
+    """
+    if not len(ids):
+        return labels
+    flat, regions, stats = flat_regions(rgb)
+    n = len(stats)
+    area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
+    moving = cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) > move_threshold
+    moving_share = np.bincount(regions[moving], minlength=n) / area
+    free = np.bincount(regions[labels == 0], minlength=n) / area >= 0.5
+    h, w = labels.shape
+    x, y, bw, bh = (stats[:, i] for i in range(4))  # each region's box
+    border = (x == 0) | (y == 0) | (x + bw >= w) | (y + bh >= h)
+    eligible = (stats[:, cv2.CC_STAT_AREA] >= min_area) & free
+    eligible[0] = False  # not a region: the pixels that are not flat
+    new = eligible & border & (moving_share >= MOVING_SHARE)
+    if not eligible.any():
+        return labels
+    out = labels.copy()
+    band_kernel = np.ones((2 * BAND + 1, 2 * BAND + 1), np.uint8)
+    reach = np.ones((2 * REACH + 1, 2 * REACH + 1), np.uint8)
+    static = cv2.blur(still, (3, 3))
+    for lab, th, t in zip(ids, thetas, trans):
+        mask = (labels == lab).astype(np.uint8)
+        kept = np.bincount(regions[joined == lab], minlength=n) / area >= KEPT_SHARE
+        near = np.unique(regions[(cv2.dilate(mask, reach) > 0) & (mask == 0)])
+        for c in near[np.where(kept[near], eligible[near], new[near])]:
+            box = (slice(max(y[c] - BAND, 0), min(y[c] + bh[c] + BAND, h)),
+                   slice(max(x[c] - BAND, 0), min(x[c] + bw[c] + BAND, w)))
+            region = regions[box] == c
+            band = cv2.dilate(region.astype(np.uint8), band_kernel) > 0
+            moved = photometric_residual(cur_gray, prev_gray, rigid_matrix(th, t), box)[band].mean()
+            nothing = static[box][band].mean()
+            if (moved <= nothing + KEEP_TOLERANCE if kept[c]
+                    else nothing < STILL_LEVELS and moved <= nothing - GAIN):
+                grown = cv2.dilate(region.astype(np.uint8), reach) > 0  # with its edge pixels
+                sub = out[box]
+                sub[grown & (sub == 0) & (region | ~flat[box])] = lab
+    return out

@@ -1,0 +1,84 @@
+"""Flat links that move along themselves (motionbits/aperture.py): a flat bar entering the
+view from the top border, rigidly attached to a textured block, both moving down."""
+
+import cv2
+import numpy as np
+
+from motionbits.aperture import flat_regions, join_flat_regions
+
+H, W = 160, 160
+BAR = (slice(None), slice(70, 86))  # columns of the flat bar
+BAR_COLOUR = (150, 40, 60)
+
+
+def _scene(shift: int, bar_top: int = 0, background_seed: int = 0) -> np.ndarray:
+    """(H, W, 3) uint8: static texture with a flat wall in columns 50-109, a nearly flat
+    bar from row ``bar_top + shift`` (the top border when 0) down to a textured block at
+    rows 70-99 (+ ``shift``)."""
+    rng = np.random.default_rng(background_seed)
+    frame = cv2.resize(rng.integers(0, 255, (H // 4, W // 4, 3), dtype=np.uint8), (W, H),
+                       interpolation=cv2.INTER_NEAREST)
+    # a flat wall behind the bar (a smooth gradient): beside a link, textured background
+    # that the body's motion would move keeps the link out (the band test)
+    wall = np.linspace(60, 110, 60, dtype=np.float32)[None, :, None] * np.ones((H, 1, 3))
+    frame[:, 50:110] = (wall + [0, 20, 40]).astype(np.uint8)
+    block = np.random.default_rng(7).integers(0, 255, (10, 14, 3), dtype=np.uint8)
+    top = 70 + shift
+    # a faint smooth texture moves with the bar (the flow sees some of its motion; the
+    # colour gradient stays far below FLAT_GRADIENT)
+    faint = cv2.GaussianBlur(np.random.default_rng(3).normal(0, 20, (H + 40, 16)), (0, 0), 4)
+    bar = np.clip(np.array(BAR_COLOUR) + faint[40 - shift:40 - shift + top, :, None], 0, 255)
+    start = bar_top + shift if bar_top else 0
+    frame[start:top, BAR[1]] = bar[start:top].astype(np.uint8)
+    frame[top:top + 30, 57:99] = cv2.resize(block, (42, 30), interpolation=cv2.INTER_NEAREST)
+    return frame
+
+
+def _gray(frame):
+    return cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY).astype(np.float32)
+
+
+def _join(prev, cur, moving=True, joined=None, bar_top=0):
+    labels = np.zeros((H, W), np.int32)
+    labels[72:103, 57:99] = 1  # the block's MotionBit (moved 3 px down), its top edge too
+    flow = np.zeros((H, W, 2), np.float32)
+    if moving:  # the backward flow of the bar and the block (DIS sees some of the bar's)
+        flow[bar_top:73, BAR[1], 1] = flow[73:103, 57:99, 1] = -3.0
+    still = np.abs(_gray(cur) - _gray(prev))
+    return join_flat_regions(
+        labels, np.array([1]), np.zeros(1), np.array([[0.0, -3.0 if moving else 0.0]]), cur,
+        _gray(cur), _gray(prev), still, flow,
+        np.zeros((H, W), np.int32) if joined is None else joined,
+        move_threshold=0.6, min_area=60)
+
+
+def test_flat_regions_are_bounded_by_colour_edges():
+    flat, regions, stats = flat_regions(_scene(0))
+    bar = regions[5:65, 72:84]
+    assert flat[5:65, 72:84].all() and len(np.unique(bar)) == 1
+    assert stats[bar[0, 0], 2] <= 18  # the bar alone: its edges close it (width 16 px)
+
+
+def test_a_flat_bar_moving_along_itself_joins_its_body():
+    prev, cur = _scene(0), _scene(3)
+    out = _join(prev, cur)
+    assert (out[0:70, 72:84] == 1).mean() > 0.95
+    changed = np.argwhere(out != _join(prev, cur, moving=False))
+    assert changed[:, 0].max() < 75 and 67 <= changed[:, 1].min() <= changed[:, 1].max() <= 88
+    # a bar the flow does not move stays background
+    assert (_join(prev, cur, moving=False)[0:70, 72:84] == 0).all()
+
+
+def test_a_flat_region_inside_the_view_does_not_join():
+    # the same bar, starting at row 20: its top edge runs across the motion
+    prev, cur = _scene(0, bar_top=20), _scene(3, bar_top=20)
+    assert (_join(prev, cur, bar_top=20)[25:70, 72:84] == 0).all()
+
+
+def test_a_joined_region_stays_while_the_body_rests():
+    rest = _scene(3)
+    joined = np.zeros((H, W), np.int32)
+    joined[0:73, 70:86] = 1
+    out = _join(rest, rest, moving=False, joined=joined)
+    assert (out[0:70, 72:84] == 1).mean() > 0.95
+    assert (_join(rest, rest, moving=False)[0:70, 72:84] == 0).all()  # never joined: no
