@@ -72,9 +72,11 @@ def flat_regions(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     smooth = cv2.GaussianBlur(half, (0, 0), 0.5).astype(np.float32)
     gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)
-    grad = cv2.magnitude(gx, gy)  # a 3x3 Sobel reads 8x the grey levels per px of a ramp
-    grad = cv2.max(cv2.max(grad[..., 0], grad[..., 1]), grad[..., 2])  # (numpy's max
-    flat = grad < 8 * 2 * FLAT_GRADIENT  # along the last axis is 20x slower); 2 px a px
+    grad = cv2.magnitude(gx, gy)
+    # the largest over R, G, B (cv2.max: numpy's max along the last axis is 20x slower)
+    grad = cv2.max(cv2.max(grad[..., 0], grad[..., 1]), grad[..., 2])
+    # a 3x3 Sobel reads 8x the grey levels per px of a ramp; one px here is two of the frame
+    flat = grad < 8 * 2 * FLAT_GRADIENT
     _, regions, stats = cv2.connectedComponentsWithStats(flat.astype(np.uint8),
                                                          connectivity=4)[:3]
     regions = cv2.resize(regions, (w, h), interpolation=cv2.INTER_NEAREST)
