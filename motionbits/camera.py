@@ -239,17 +239,18 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     par = None if grid_shape is None else fit_parallax(
         points, back_m - points, reliable, flow_m, grid_shape, support=parallax,
         threshold=threshold)
-    epipolar = None
     if par is not None:
         explained = explained | par[1]
+    # the static world's model (the homography and its parallax) must explain enough nodes
+    if explained[reliable].mean() < support:
+        return CameraMotion(flow_back, prev, back_points, None)
+    par_field = epipolar = None
+    if par is not None:
+        par_field = par[0]
         # a residual along its epipolar line is what the static world's parallax looks
         # like, whether or not the smooth parallax field reproduces it (a box standing on
         # the table, the floor far below it)
         epipolar = epipolar_distance(points, back_m - points, par[2])[0] < threshold
-    # the static world's model (the homography and its parallax) must explain enough nodes
-    if explained[reliable].mean() < support:
-        return CameraMotion(flow_back, prev, back_points, None)
-    par_field = None if par is None else par[0]
     maps = world_maps(cam, flow_m.shape[:2], par_field)
     prev_m = stabilize_previous(prev, cam, maps=maps)
     if par_field is not None:

@@ -352,7 +352,8 @@ class MotionBitsSegmenter:
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold,
                 revealed=revealed)
             cw, ch = grid.cell
-            labels = remove_specks(labels, min_area=int(np.ceil(SPECK_CELLS * cw * ch)))
+            speck_area = int(np.ceil(SPECK_CELLS * cw * ch))
+            labels = remove_specks(labels, min_area=speck_area)
             # bodies set down: pieces left behind by a moving MotionBit become MotionBits
             labels = self._setdown.confirm(labels, cur_g, prev_g)
             labels, held, self._next_id = self._setdown.split(
@@ -407,7 +408,7 @@ class MotionBitsSegmenter:
             # masks (trimming them would compound from frame to frame)
             with_links = join_flat_regions(
                 labels, ids, thetas, trans, cur, cur_g, prev_g, still, flow_m, joined,
-                move_threshold=cfg.move_threshold, min_area=int(np.ceil(SPECK_CELLS * cw * ch)))
+                move_threshold=cfg.move_threshold, min_area=speck_area)
             self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
