@@ -185,7 +185,8 @@ class MotionBitsConfig:
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
     # ours (motionbits/merging.py): touching MotionBits are one body when one affine motion
     # explains the images of both within merge_agree grey levels of their own motions (at
-    # some frame), and different bodies for good once it is worse by merge_disagree
+    # some frame), and different bodies for good once it is worse by merge_disagree at two
+    # frames (or by twice that at one; merging.DISAGREE_FRAMES, merging.AT_ONCE)
     merge_agree: float = 1.5
     merge_disagree: float = 6.0
     # ours (motionbits/retirement.py): a MotionBit is retired when the static world explains

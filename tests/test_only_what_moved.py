@@ -82,10 +82,22 @@ def test_groups_agree_disagree_and_oldest_id():
     groups.observe(5, 8, 1.0)  # agree
     groups.forbid(8, [2])
     assert groups.representatives([2, 3, 5, 8]) == {2: 2, 3: 3, 5: 3, 8: 3}
-    groups.observe(3, 8, 9.0)  # a clear disagreement is final ...
+    groups.observe(3, 8, 13.0)  # a disagreement by twice the margin is final ...
     groups.observe(3, 8, 0.1)  # ... and a later agreement does not undo it
     rep = groups.representatives([3, 5, 8])
     assert rep[3] != rep[8]
+
+
+def test_groups_disagree_at_two_frames_not_one():
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    groups.observe(1, 2, 0.5)  # agree
+    groups.observe(1, 2, 9.0)  # one frame beyond the margin (under twice it) ...
+    assert groups.representatives([1, 2]) == {1: 1, 2: 1}  # ... still one body
+    assert not groups.known(1, 2)
+    groups.observe(1, 2, 0.3)
+    groups.observe(1, 2, 7.0)  # a second frame beyond it: different bodies for good
+    assert groups.known(1, 2)
+    assert groups.representatives([1, 2]) == {1: 1, 2: 2}
 
 
 def test_touching_pairs():
