@@ -85,7 +85,7 @@ def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
 
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
-                  trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
+                  trans: np.ndarray, flow_back: np.ndarray, speed: np.ndarray, cur_gray: np.ndarray,
                   prev_gray: np.ndarray, still: np.ndarray, prior: np.ndarray,
                   prior_valid: np.ndarray, texture: np.ndarray, earned: np.ndarray, *,
                   bonus: float, photo_weight: float, evidence: float, kept: np.ndarray,
@@ -106,6 +106,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         labels: (K,) ids of the clusters, with backward motions ``thetas`` (K,), ``trans``
             (K, 2).
         flow_back: (H, W, 2) flow current -> previous.
+        speed: (H, W) float32 its length (``cv2.magnitude``).
         cur_gray, prev_gray: (H, W) float32 grey frames.
         still: (H, W) float32 grey levels by which "nothing moved" misses each pixel
             (:func:`motionbits.evidence.static_residual`).
@@ -138,8 +139,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     h, w = flow_back.shape[:2]
     window = PHOTO_WINDOW
     static_photo = cv2.blur(still, (window, window))
-    static_cost = texture * cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + (
-        photo_weight * static_photo)
+    static_cost = texture * speed + photo_weight * static_photo
     if revealed is not None:
         static_cost[revealed] = photo_weight * static_photo[revealed]
     # last frame's label is credited where it was carried consistently; against the

@@ -38,11 +38,11 @@ STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 BORN_FRESH = 0.5
 
 
-def standing_still(flow: np.ndarray, reliable: np.ndarray, move_threshold: float) -> np.ndarray:
+def standing_still(speed: np.ndarray, reliable: np.ndarray, move_threshold: float) -> np.ndarray:
     """(H, W) bool: pixels seen standing still now -- reliable flow (consistent both ways)
-    that moves them less than ``move_threshold`` px; ``flow``: (H, W, 2) float32 backward
-    flow relative to the camera."""
-    return reliable & (cv2.magnitude(flow[..., 0], flow[..., 1]) < move_threshold)
+    that moves them less than ``move_threshold`` px; ``speed``: (H, W) float32 length of
+    the backward flow relative to the camera (``cv2.magnitude``)."""
+    return reliable & (speed < move_threshold)
 
 
 def seen_still(carried: np.ndarray, standing: np.ndarray) -> np.ndarray:
