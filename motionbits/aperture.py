@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
+from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
@@ -130,7 +130,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     band_kernel = np.ones((2 * BAND + 1, 2 * BAND + 1), np.uint8)
     reach = np.ones((2 * REACH + 1, 2 * REACH + 1), np.uint8)
     static = None
-    boxes = ndimage.find_objects(labels)
+    boxes = label_boxes(labels)
     was_id, was_region = joined[was], regions[was]  # pixels joined at the last frame
     for lab, th, t in zip(ids, thetas, trans):
         if lab > len(boxes) or boxes[lab - 1] is None:

@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
@@ -187,7 +188,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
 def fill_holes(label_map: np.ndarray) -> np.ndarray:
     """Background pixels enclosed by one label take that label; (H, W) int32."""
     out = label_map.copy()
-    for i, box in enumerate(ndimage.find_objects(label_map)):
+    for i, box in enumerate(label_boxes(label_map)):
         if box is None:
             continue
         sub = out[box]
@@ -200,7 +201,7 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
     """Zero every connected piece of a label smaller than ``min_area`` px, except the
     largest piece of each label (a small body is still a body)."""
     out = label_map.copy()
-    for i, box in enumerate(ndimage.find_objects(label_map)):
+    for i, box in enumerate(label_boxes(label_map)):
         if box is None:
             continue
         mask = (label_map[box] == i + 1).astype(np.uint8)
