@@ -146,7 +146,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     # last frame's label is credited where it was carried consistently; against the
     # background, a MotionBit's label only where its motion once showed in the images
     # (``earned``): elsewhere the background gets the same credit
-    credit = np.where(prior_valid, bonus, 0.0).astype(np.float32)
+    credit = prior_valid * np.float32(bonus)  # (H, W) float32: bonus or 0
     best = static_cost - credit * ((prior == 0) | ~earned)
     out = np.zeros((h, w), np.int32)
     shown = np.zeros((h, w), bool)
