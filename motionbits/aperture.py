@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
+from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
@@ -88,7 +88,7 @@ def flat_regions(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                       trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
-                      prev_gray: np.ndarray, still: np.ndarray, flow_back: np.ndarray,
+                      prev_gray: np.ndarray, still: np.ndarray, speed: np.ndarray,
                       joined: np.ndarray, *, move_threshold: float, min_area: int
                       ) -> np.ndarray:
     """The label map with flat links that move along themselves joined to their MotionBit.
@@ -100,7 +100,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
         rgb: (H, W, 3) uint8 current frame.
         cur_gray, prev_gray: (H, W) float32 grey frames (``prev_gray`` camera-stabilised).
         still: (H, W) float32 grey levels by which "nothing moved" misses each pixel.
-        flow_back: (H, W, 2) float32 backward flow relative to the camera.
+        speed: (H, W) float32 length of the backward flow relative to the camera.
         joined: (H, W) int32 pixels joined at the last frame (their id), carried to this one.
         move_threshold: px; a pixel's flow moves above this.
         min_area: px; smaller regions never join.
@@ -114,7 +114,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     flat, regions, stats = flat_regions(rgb)
     n = len(stats)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
-    moving = cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) > move_threshold
+    moving = speed > move_threshold
     moving_share = np.bincount(regions[moving], minlength=n) / area
     free = np.bincount(regions[labels == 0], minlength=n) / area >= 0.5
     h, w = labels.shape
@@ -130,7 +130,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     band_kernel = np.ones((2 * BAND + 1, 2 * BAND + 1), np.uint8)
     reach = np.ones((2 * REACH + 1, 2 * REACH + 1), np.uint8)
     static = None
-    boxes = ndimage.find_objects(labels)
+    boxes = label_boxes(labels)
     was_id, was_region = joined[was], regions[was]  # pixels joined at the last frame
     for lab, th, t in zip(ids, thetas, trans):
         if lab > len(boxes) or boxes[lab - 1] is None:

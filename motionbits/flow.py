@@ -23,6 +23,7 @@ __all__ = [
     "warp_nearest",
     "forward_backward_error",
     "sample_maps",
+    "nearest_maps",
     "pixel_grid",
     "check_flow",
 ]
@@ -186,8 +187,16 @@ def sample_maps(flow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return xs + flow[..., 0], ys + flow[..., 1]
 
 
+def nearest_maps(map_x: np.ndarray, map_y: np.ndarray) -> tuple[np.ndarray, None]:
+    """:func:`sample_maps`' (H, W) float32 maps as cv2.remap reads them for the nearest
+    pixel: one (H, W, 2) int16 map of rounded (x, y) and None. :func:`warp_nearest` with
+    them gives the same result as with the float maps (cv2.remap converts those the same
+    way on each call), without converting them again for every map carried."""
+    return cv2.convertMaps(map_x, map_y, cv2.CV_16SC2, nninterpolation=True)
+
+
 def warp_nearest(values: np.ndarray, flow_back: np.ndarray, fill: int = 0,
-                 maps: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                 maps: tuple[np.ndarray, np.ndarray | None] | None = None) -> np.ndarray:
     """Carry a per-pixel map from the previous frame to the current one.
 
     Args:
@@ -195,7 +204,7 @@ def warp_nearest(values: np.ndarray, flow_back: np.ndarray, fill: int = 0,
             that OpenCV remaps: int32, float32, uint8, uint16; C <= 4).
         flow_back: (H, W, 2) float32 flow from the current frame to the previous one.
         fill: value for pixels whose source lies outside the image.
-        maps: ``sample_maps(flow_back)`` if already computed.
+        maps: ``sample_maps(flow_back)`` or :func:`nearest_maps` of it, if already computed.
 
     Returns:
         map of the same shape on the current frame, ``values[p + flow_back(p)]`` (nearest

@@ -40,7 +40,12 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
     Returns:
         (H, W) int32 classes; 0 marks pixels background in every map.
     """
-    key = history.astype(np.int64) * (int(labels.max()) + 1) + labels.astype(np.int64)
+    top = int(labels.max()) + 1
+    # the pair (history, label) as one integer: int32 where it fits (faster to build and
+    # to look up), else int64
+    key = history.astype(np.int32 if (int(history.max()) + 1) * top < 1 << 31 else np.int64)
+    key *= top
+    key += labels
     rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
     if margin > 0 and len(rows):
         # only the labelled box grown by 2 margin + 1 px can hold non-interior pixels, and
@@ -54,17 +59,18 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
         square = np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)
         interior = cv2.dilate(lab, square) == cv2.erode(lab, square)
         if interior.any() and not interior.all():
-            src = np.where(interior, 0, 1).astype(np.uint8)
+            outside = ~interior
             _, nearest = cv2.distanceTransformWithLabels(
-                src, cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
+                outside.view(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
             interior_flat = np.flatnonzero(interior.ravel())
-            edge = np.flatnonzero(~interior.ravel())  # interior pixels are their own nearest
+            edge = np.flatnonzero(outside.ravel())  # interior pixels are their own nearest
             sub = key[box].ravel()  # a copy: the box is not contiguous in ``key``
             sub[edge] = sub[interior_flat[nearest.ravel()[edge] - 1]]
             key[box] = sub.reshape(interior.shape)
     # compact renumbering by rank; class 0 stays "background in every map"
-    if key.max() < 4 * key.size:  # a table lookup, without np.unique's sort
-        present = np.zeros(int(key.max()) + 1, np.int64)
+    largest = int(key.max())
+    if largest < 4 * key.size:  # a table lookup, without np.unique's sort
+        present = np.zeros(largest + 1, np.int64)
         present[key.ravel()] = 1
         rank = (np.cumsum(present) - (1 if present[0] else 0)).astype(np.int32)
         return rank[key]

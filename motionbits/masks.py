@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
@@ -85,7 +86,7 @@ def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
 
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
-                  trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
+                  trans: np.ndarray, flow_back: np.ndarray, speed: np.ndarray, cur_gray: np.ndarray,
                   prev_gray: np.ndarray, still: np.ndarray, prior: np.ndarray,
                   prior_valid: np.ndarray, texture: np.ndarray, earned: np.ndarray, *,
                   bonus: float, photo_weight: float, evidence: float, kept: np.ndarray,
@@ -106,6 +107,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         labels: (K,) ids of the clusters, with backward motions ``thetas`` (K,), ``trans``
             (K, 2).
         flow_back: (H, W, 2) flow current -> previous.
+        speed: (H, W) float32 its length (``cv2.magnitude``).
         cur_gray, prev_gray: (H, W) float32 grey frames.
         still: (H, W) float32 grey levels by which "nothing moved" misses each pixel
             (:func:`motionbits.evidence.static_residual`).
@@ -138,14 +140,13 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     h, w = flow_back.shape[:2]
     window = PHOTO_WINDOW
     static_photo = cv2.blur(still, (window, window))
-    static_cost = texture * cv2.magnitude(flow_back[..., 0], flow_back[..., 1]) + (
-        photo_weight * static_photo)
+    static_cost = texture * speed + photo_weight * static_photo
     if revealed is not None:
         static_cost[revealed] = photo_weight * static_photo[revealed]
     # last frame's label is credited where it was carried consistently; against the
     # background, a MotionBit's label only where its motion once showed in the images
     # (``earned``): elsewhere the background gets the same credit
-    credit = np.where(prior_valid, bonus, 0.0).astype(np.float32)
+    credit = prior_valid * np.float32(bonus)  # (H, W) float32: bonus or 0
     best = static_cost - credit * ((prior == 0) | ~earned)
     out = np.zeros((h, w), np.int32)
     shown = np.zeros((h, w), bool)
@@ -187,7 +188,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
 def fill_holes(label_map: np.ndarray) -> np.ndarray:
     """Background pixels enclosed by one label take that label; (H, W) int32."""
     out = label_map.copy()
-    for i, box in enumerate(ndimage.find_objects(label_map)):
+    for i, box in enumerate(label_boxes(label_map)):
         if box is None:
             continue
         sub = out[box]
@@ -200,7 +201,7 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
     """Zero every connected piece of a label smaller than ``min_area`` px, except the
     largest piece of each label (a small body is still a body)."""
     out = label_map.copy()
-    for i, box in enumerate(ndimage.find_objects(label_map)):
+    for i, box in enumerate(label_boxes(label_map)):
         if box is None:
             continue
         mask = (label_map[box] == i + 1).astype(np.uint8)

@@ -23,9 +23,12 @@ except the number of ids.
 
 from __future__ import annotations
 
+from functools import cache
+
 import cv2
 import numpy as np
 
+from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
@@ -46,11 +49,11 @@ AT_ONCE = 2.0
 BORN_FRESH = 0.5
 
 
-def standing_still(flow: np.ndarray, reliable: np.ndarray, move_threshold: float) -> np.ndarray:
+def standing_still(speed: np.ndarray, reliable: np.ndarray, move_threshold: float) -> np.ndarray:
     """(H, W) bool: pixels seen standing still now -- reliable flow (consistent both ways)
-    that moves them less than ``move_threshold`` px; ``flow``: (H, W, 2) float32 backward
-    flow relative to the camera."""
-    return reliable & (cv2.magnitude(flow[..., 0], flow[..., 1]) < move_threshold)
+    that moves them less than ``move_threshold`` px; ``speed``: (H, W) float32 length of
+    the backward flow relative to the camera (``cv2.magnitude``)."""
+    return reliable & (speed < move_threshold)
 
 
 def seen_still(carried: np.ndarray, standing: np.ndarray) -> np.ndarray:
@@ -172,12 +175,15 @@ class MotionBitGroups:
         return rep
 
 
-def union_excess(labels: np.ndarray, a: int, b: int, motion_a: np.ndarray, motion_b: np.ndarray,
-                 union: np.ndarray, cur: np.ndarray, prev: np.ndarray) -> float:
+def union_excess(labels: np.ndarray, a: int, b: int, boxes: list, motion_a: np.ndarray,
+                 motion_b: np.ndarray, union: np.ndarray, cur: np.ndarray, prev: np.ndarray
+                 ) -> float:
     """Grey levels by which the (2, 3) ``union`` motion explains the worse of MotionBits
-    ``a`` and ``b`` (their pixels in ``labels``) worse than its own (2, 3) motion does."""
-    ys, xs = np.nonzero((labels == a) | (labels == b))
-    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
+    ``a`` and ``b`` (their pixels in ``labels``; ``boxes``: ``label_boxes(labels)``) worse
+    than its own (2, 3) motion does."""
+    (rows_a, cols_a), (rows_b, cols_b) = boxes[a - 1], boxes[b - 1]
+    box = (slice(min(rows_a.start, rows_b.start), max(rows_a.stop, rows_b.stop)),
+           slice(min(cols_a.start, cols_b.start), max(cols_a.stop, cols_b.stop)))
     sub = labels[box]
     e_union = photometric_residual(cur, prev, union, box)
     worst = 0.0
@@ -188,12 +194,12 @@ def union_excess(labels: np.ndarray, a: int, b: int, motion_a: np.ndarray, motio
     return worst
 
 
-def stillness_visible(labels: np.ndarray, a: int, motion: np.ndarray, cur: np.ndarray) -> float:
+def stillness_visible(labels: np.ndarray, a: int, box: tuple[slice, slice], motion: np.ndarray,
+                      cur: np.ndarray) -> float:
     """Grey levels by which the (2, 3) ``motion`` would change the image on MotionBit
-    ``a``'s pixels: mean |I - I pulled back by the motion|. Large on texture, ~0 on a flat
-    region or for motion along its stripes -- where standing still is not observable."""
-    ys, xs = np.nonzero(labels == a)
-    box = slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1)
+    ``a``'s pixels (in ``labels``, within their bounding ``box``): mean |I - I pulled back
+    by the motion|. Large on texture, ~0 on a flat region or for motion along its stripes
+    -- where standing still is not observable."""
     return float(photometric_residual(cur, cur, motion, box)[labels[box] == a].mean())
 
 
@@ -234,18 +240,19 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     reach = int(np.ceil(max(grid.cell)))
     born = {int(i) for i in ids[ids >= first_new]
             if np.mean(still_before, where=node_ids == i) > BORN_FRESH}
+    boxes = cache(lambda: label_boxes(labels))  # once, if a pair asks
     for a, b in touching_pairs(labels, reach=reach):
         if groups.known(a, b):
             continue
         for x, y in ((a, b), (b, a)):
             if x in born and y < first_new and y in own and y in moving:
-                if stillness_visible(labels, x, own[y], cur) > disagree:
+                if stillness_visible(labels, x, boxes()[x - 1], own[y], cur) > disagree:
                     groups.forbid(x, [y])
         if groups.known(a, b) or (a not in own and b not in own):
             continue
         sel = (node_ids == a) | (node_ids == b)
         union = fit_affine(grid.points[sel], back_points[sel], reliability[sel])
-        excess = union_excess(labels, a, b, own.get(a, STILL), own.get(b, STILL),
+        excess = union_excess(labels, a, b, boxes(), own.get(a, STILL), own.get(b, STILL),
                               union, cur, prev)
         if (a in own and b in own) or excess > disagree:
             groups.observe(a, b, excess)

@@ -6,8 +6,8 @@ from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
+from motionbits.boxes import label_boxes
 from motionbits.nodes import NodeGrid
 from motionbits.objects import Instance, encode_rle
 from motionbits.twists import se2_log
@@ -159,7 +159,7 @@ def build_result(frame_index: int, shown: np.ndarray, node_ids: np.ndarray, ids:
     if (h, w) != out.shape:
         out = cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)
     records = []
-    for index, box in enumerate(ndimage.find_objects(out)):
+    for index, box in enumerate(label_boxes(out)):
         if box is None:
             continue
         lab = index + 1

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
+from motionbits.boxes import label_boxes
 from motionbits.twists import rigid_matrix
 
 __all__ = ["Origin", "origin_residuals", "moved_evidence", "retire"]
@@ -140,7 +140,7 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
     world = np.eye(3) if cam is None else cam
     own = {int(i): world @ np.vstack([rigid_matrix(th, t), [0.0, 0.0, 1.0]])
            for i, th, t in zip(ids, thetas, trans)}
-    boxes = {i + 1: box for i, box in enumerate(ndimage.find_objects(labels)) if box}
+    boxes = {i + 1: box for i, box in enumerate(label_boxes(labels)) if box}
     origins = {i: o for i, o in origins.items() if i in boxes}
     out = labels
     if first is not None:

@@ -86,7 +86,9 @@ class StaticMemory:
             return None
         self._difference = _color_difference(cur, self.color)
         revealed = self.known & self.was_covered & (self._difference < self.tolerance)
-        np.copyto(still, np.minimum(still, cv2.absdiff(cur_gray, self.gray)), where=revealed)
+        # cv2.copyTo writes into ``still`` (np.copyto with ``where`` is ~20x slower)
+        cv2.copyTo(np.minimum(still, cv2.absdiff(cur_gray, self.gray)), revealed.view(np.uint8),
+                   still)
         return revealed
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
@@ -105,8 +107,9 @@ class StaticMemory:
         self.was_covered |= self._difference > self.covered
         calm = standing & (cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW))
                         < self.tolerance)
-        np.copyto(self.color, cur, where=calm[..., None])
-        np.copyto(self.gray, cur_gray, where=calm)
+        # in place; np.copyto with a broadcast ``where`` is ~100x slower
+        cv2.copyTo(cur, calm.view(np.uint8), self.color)
+        cv2.copyTo(cur_gray, calm.view(np.uint8), self.gray)
         self.known |= calm
         self.was_covered &= ~calm
         self._difference = None

@@ -260,7 +260,8 @@ class MotionBitsSegmenter:
             # a carried label holds a pixel only where the flow is consistent both ways and
             # its correspondence explains the pixel's appearance: uncovered background
             # does not inherit the label of the body that uncovered it
-            prior_valid = (fb_err < cfg.fb_sigma) & appearance_consistent(
+            reliable = fb_err < cfg.fb_sigma
+            prior_valid = reliable & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
             (prior, earned, still_seen, joined), history = self._temporal.carry(
@@ -342,11 +343,13 @@ class MotionBitsSegmenter:
                 move_threshold=cfg.move_threshold, motion_evidence=cfg.motion_evidence)
             thetas, trans = fit_cluster_motions(pts, back_pts, reliability, node_ids, ids,
                                                 cfg.ransac_threshold)
-            kept = np.setdiff1d(np.unique(prior[prior_valid & (prior > 0)]), ids)
+            # ids carried validly (np.unique's result, without its sort)
+            kept = np.setdiff1d(np.flatnonzero(np.bincount(prior[prior_valid & (prior > 0)])), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
             carried_earned = earned
+            speed = cv2.magnitude(flow_m[..., 0], flow_m[..., 1])  # (h, w) px the pixel moves
             labels, earned = assign_pixels(
-                grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g, still,
+                grid, node_ids, ids, thetas, trans, flow_m, speed, cur_g, prev_g, still,
                 prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
                 bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold,
@@ -392,7 +395,7 @@ class MotionBitsSegmenter:
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
-            standing = standing_still(flow_m, fb_err < cfg.fb_sigma, cfg.move_threshold)
+            standing = standing_still(speed, reliable, cfg.move_threshold)
             self._still = seen_still(still_seen, standing)
             self._memory.update(cur, cur_g, prev_g, standing)
             self._earned = (earned & (labels > 0)).astype(np.int32)
@@ -407,7 +410,7 @@ class MotionBitsSegmenter:
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
             with_links = join_flat_regions(
-                labels, ids, thetas, trans, cur, cur_g, prev_g, still, flow_m, joined,
+                labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
                 move_threshold=cfg.move_threshold, min_area=speck_area)
             self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
             shown = snap_to_edges(group_map(with_links, rep), cur,

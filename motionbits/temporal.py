@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from motionbits.flow import warp_nearest
+from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.identity import refine_history
 
 __all__ = ["TemporalState", "WINDOW_PARTS"]
@@ -66,7 +66,7 @@ class TemporalState:
 
         Args:
             maps: (h, w) int32 maps of the previous frame to carry too (the label map...),
-                in the same remap calls.
+                with the same pixel maps.
             flow_back: (h, w, 2) flow from the current frame to the previous one.
             flow_maps: ``motionbits.flow.sample_maps(flow_back)`` if already computed.
 
@@ -74,15 +74,14 @@ class TemporalState:
             (carried maps, history): ``maps`` carried, and the carried history the
             constraints read, (h, w) int32. The copies are kept carried for :meth:`fold`.
         """
-        stack = [*maps, *self.histories]
-        carried = []
-        for start in range(0, len(stack), 4):  # OpenCV remaps at most 4 channels at once
-            chunk = warp_nearest(np.dstack(stack[start:start + 4]), flow_back, maps=flow_maps)
-            carried.append(chunk.reshape(chunk.shape[:2] + (-1,)))
-        carried = np.concatenate(carried, axis=2)
-        m = len(maps)
-        self.histories = np.ascontiguousarray(np.moveaxis(carried[..., m:], 2, 0))
-        return [carried[..., i] for i in range(m)], self.histories[self.oldest]
+        # the nearest-pixel maps are converted once (cv2.remap converts float maps on
+        # every call, the same way) and each map is remapped alone: stacking the maps into
+        # channels and splitting them again costs more than the remaps
+        nearest = nearest_maps(*(sample_maps(flow_back) if flow_maps is None else flow_maps))
+        self.histories = np.stack([warp_nearest(h, flow_back, maps=nearest)
+                                   for h in self.histories])
+        return ([warp_nearest(m, flow_back, maps=nearest) for m in maps],
+                self.histories[self.oldest])
 
     def project(self, project: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
         """Move the past edge maxima onto the current graph.

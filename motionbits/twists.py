@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.boxes import label_boxes
 from motionbits.nodes import binary_fill_holes
 
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
@@ -343,7 +344,7 @@ def refine_moving_motions(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: n
     small = labels.max() < 1 << 16  # uint16 morphology (faster) where the ids fit
     inner = cv2.erode(labels.astype(np.uint16 if small else np.float32),
                       np.ones((REFINE_ERODE, REFINE_ERODE), np.uint8)).astype(np.int32)
-    boxes = ndimage.find_objects(inner, max_label=max(int(ids[k]) for k in todo))
+    boxes = label_boxes(inner, max_label=max(int(ids[k]) for k in todo))
     for k in todo:
         box = boxes[int(ids[k]) - 1]
         if box is not None:

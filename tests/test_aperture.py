@@ -47,7 +47,7 @@ def _join(prev, cur, moving=True, joined=None, bar_top=0):
     still = np.abs(_gray(cur) - _gray(prev))
     return join_flat_regions(
         labels, np.array([1]), np.zeros(1), np.array([[0.0, -3.0 if moving else 0.0]]), cur,
-        _gray(cur), _gray(prev), still, flow,
+        _gray(cur), _gray(prev), still, cv2.magnitude(flow[..., 0], flow[..., 1]),
         np.zeros((H, W), np.int32) if joined is None else joined,
         move_threshold=0.6, min_area=60)
 

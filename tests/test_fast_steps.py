@@ -5,6 +5,8 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.boxes import label_boxes
+from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
 from motionbits.merging import touching_pairs
@@ -31,6 +33,28 @@ def test_binary_fill_holes_is_scipys():
     ring[1:6, 1:6] = True
     ring[3, 3] = False
     assert binary_fill_holes(ring)[3, 3] and not binary_fill_holes(np.zeros((3, 3), bool)).any()
+
+
+def test_label_boxes_are_find_objects():
+    rng = np.random.default_rng(2)
+    maps = [_blobs(rng, n=n) for n in (1, 4, 9) for _ in range(5)]
+    maps += [np.zeros((20, 30), np.int32), np.pad(np.ones((1, 1), np.int32), ((19, 0), (29, 0)))]
+    for labels in maps:
+        for max_label in (0, 2, 12):
+            assert label_boxes(labels, max_label) == ndimage.find_objects(labels, max_label)
+
+
+def test_nearest_maps_remap_as_the_float_maps():
+    rng = np.random.default_rng(3)
+    values = rng.integers(0, 1000, (30, 40)).astype(np.int32)
+    # half-pixel, far out of the image, non-finite: every rounding and border case
+    flow = np.round(rng.standard_normal((30, 40, 2)) * 8).astype(np.float32) / 2
+    flow[0, :5] = (1e6, -1e6)
+    flow[1, :5] = np.inf
+    flow[2, :5] = np.nan
+    maps = sample_maps(flow)
+    np.testing.assert_array_equal(warp_nearest(values, flow, maps=nearest_maps(*maps)),
+                                  warp_nearest(values, flow, maps=maps))
 
 
 def test_edge_slot_finds_each_neighbour_and_nothing_else():

@@ -1,6 +1,7 @@
 """Only what moved is a MotionBit: uncovered background returns to background, one body is one
 MotionBit, pieces that never moved are retired (issue "Only what moved")."""
 
+import cv2
 import numpy as np
 import pytest
 
@@ -115,7 +116,8 @@ def test_seen_still_remembers_stillness_and_ignores_unreliable_flow():
     reliable[:3] = False  # no trustworthy flow on the top rows: not seen at all
     carried = np.zeros((10, 12), np.int32)
     carried[5:, 8:] = 1  # seen still at an earlier frame
-    out = seen_still(carried, standing_still(flow, reliable, move_threshold=0.6))
+    out = seen_still(carried, standing_still(cv2.magnitude(flow[..., 0], flow[..., 1]), reliable,
+                                            move_threshold=0.6))
     assert out.dtype == np.int32
     assert out[3:, :6].all() and not out[:3, :6].any()
     assert not out[:5, 6:].any() and out[5:, 8:].all() and not out[5:, 6:8].any()
