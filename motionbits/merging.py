@@ -44,8 +44,9 @@ STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 #: or flat parts DIS reads wrong at that frame (round 7: mIoU 51.1 / 45.4 -> 52.2 / 46.0).
 DISAGREE_FRAMES = 2
 AT_ONCE = 2.0
-#: A new MotionBit was born out of still pixels when more than this share of its nodes
-#: came from pixels never in a MotionBit and seen standing still before (:func:`seen_still`).
+#: A new MotionBit was born out of still pixels, as far as an older MotionBit can tell, when
+#: more than this share of its nodes came from pixels never in a MotionBit and seen standing
+#: still (:func:`seen_still`) since that MotionBit first moved.
 BORN_FRESH = 0.5
 
 
@@ -56,19 +57,21 @@ def standing_still(speed: np.ndarray, reliable: np.ndarray, move_threshold: floa
     return reliable & (speed < move_threshold)
 
 
-def seen_still(carried: np.ndarray, standing: np.ndarray) -> np.ndarray:
-    """Where each pixel, followed by the flow, has been seen standing still: ``carried``
-    (the map of the last frame carried to this one) or now (``standing``, from
-    :func:`standing_still`).
+def seen_still(carried: np.ndarray, standing: np.ndarray, frame_index: int) -> np.ndarray:
+    """When each pixel, followed by the flow, was last seen standing still: now
+    (``standing``, from :func:`standing_still`) or as ``carried`` (the map of the last
+    frame carried to this one).
 
     Args:
-        carried: (H, W) int32, 1 where the pixel was seen still before.
+        carried: (H, W) int32, 1 + the last frame at which the pixel was seen still
+            (0 = never).
         standing: (H, W) bool, seen standing still now.
+        frame_index: this frame's index.
 
     Returns:
         (H, W) int32 map of the same kind, for the next frame.
     """
-    return (standing | (carried > 0)).astype(np.int32)
+    return np.where(standing, np.int32(frame_index + 1), carried).astype(np.int32)
 
 
 def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
@@ -208,14 +211,16 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
                      trans: np.ndarray, moving: set[int], first_new: int,
                      still_before: np.ndarray, back_points: np.ndarray,
                      reliability: np.ndarray, cur: np.ndarray, prev: np.ndarray, *,
-                     disagree: float) -> None:
+                     disagree: float, first_moved: dict[int, int]) -> None:
     """Record in ``groups`` this frame's evidence on every pair of touching MotionBits.
 
-    A MotionBit born now out of pixels never in a MotionBit and seen standing still at an
-    earlier frame (``BORN_FRESH`` of its nodes) and a moving older MotionBit whose motion
-    would have shown on it are different bodies for good (the pushed block is not the
-    gripper that pushes it; a part of the gripper that the masks missed while it moved
-    is). Otherwise, where either has a motion this frame, one affine motion is fitted to
+    A MotionBit born now out of pixels never in a MotionBit and seen standing still while
+    a moving older MotionBit moved (``BORN_FRESH`` of its nodes, seen still at or after
+    the older one's first moving frame), where the older one's motion would have shown,
+    are different bodies for good (the pushed block is not the gripper that pushes it; a
+    part of the gripper that the masks missed while it moved is). Stillness seen before
+    the older MotionBit moved tells nothing about the two: an arm's upper part, slow
+    near the shoulder, reads as standing still while the whole arm starts moving. Otherwise, where either has a motion this frame, one affine motion is fitted to
     the nodes of both and :func:`union_excess` is observed -- a member without
     motion stands still (``STILL``), which can show that they differ, never that they
     agree.
@@ -229,25 +234,26 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
             and ``trans`` (K, 2).
         moving: ids whose motion moved their nodes this frame.
         first_new: ids from this one on were born now.
-        still_before: (n,) bool nodes never in a MotionBit and seen standing still at an
-            earlier frame (:func:`seen_still`).
+        still_before: (n,) int, 1 + the last earlier frame at which each node was seen
+            standing still (:func:`seen_still`), 0 where never or once in a MotionBit.
         back_points: (n, 2) each node's backward target relative to the camera.
         reliability: (n,) flow reliability of each node.
         cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
         disagree: grey levels (config ``merge_disagree``).
+        first_moved: id -> the frame at which it first moved (``MotionSpans.first``).
     """
     own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
     reach = int(np.ceil(max(grid.cell)))
-    born = {int(i) for i in ids[ids >= first_new]
-            if np.mean(still_before, where=node_ids == i) > BORN_FRESH}
+    newborn = {int(i) for i in ids[ids >= first_new]}
     boxes = cache(lambda: label_boxes(labels))  # once, if a pair asks
     for a, b in touching_pairs(labels, reach=reach):
         if groups.known(a, b):
             continue
         for x, y in ((a, b), (b, a)):
-            if x in born and y < first_new and y in own and y in moving:
-                if stillness_visible(labels, x, boxes()[x - 1], own[y], cur) > disagree:
-                    groups.forbid(x, [y])
+            if (x in newborn and y < first_new and y in own and y in moving
+                    and np.mean(still_before > first_moved[y], where=node_ids == x) > BORN_FRESH
+                    and stillness_visible(labels, x, boxes()[x - 1], own[y], cur) > disagree):
+                groups.forbid(x, [y])
         if groups.known(a, b) or (a not in own and b not in own):
             continue
         sel = (node_ids == a) | (node_ids == b)

@@ -131,7 +131,7 @@ class MotionBitsSegmenter:
         # label history and largest earlier edge weights (whole video or config.window)
         self._temporal: TemporalState | None = None
         self._earned: np.ndarray | None = None  # (h, w) int32 evidence of the labels (masks)
-        self._still: np.ndarray | None = None  # (h, w) int32 pixels seen standing still
+        self._still: np.ndarray | None = None  # (h, w) int32 1 + last frame seen standing still
         self._joined: np.ndarray | None = None  # (h, w) int32 flat links joined (aperture.py)
         self._memory: StaticMemory | None = None  # the static world's look (revealed.py)
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
@@ -170,7 +170,7 @@ class MotionBitsSegmenter:
         self._labels = np.zeros((hw, ww), np.int32)
         self._temporal = TemporalState((hw, ww), self._grid.neighbors.shape, self.config.window)
         self._earned = np.zeros((hw, ww), np.int32)  # 1 = its MotionBit showed there
-        self._still = np.zeros((hw, ww), np.int32)  # 1 = seen standing still (merging)
+        self._still = np.zeros((hw, ww), np.int32)  # 1 + last frame seen standing still (merging)
         self._joined = np.zeros((hw, ww), np.int32)  # id of the shown mask that joined it
         self._memory = StaticMemory((hw, ww), self.config.reveal_tolerance,
                                     self.config.reveal_covered)
@@ -369,10 +369,11 @@ class MotionBitsSegmenter:
         with self._stage("merging"):
             moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
             self._spans.record(moving, self.frame_index)
-            still_before = (hist_nodes == 0) & (still_seen[ix[:, 1], ix[:, 0]] > 0)
+            # when each node never in a MotionBit was last seen standing still (+1; 0: never)
+            still_before = np.where(hist_nodes == 0, still_seen[ix[:, 1], ix[:, 0]], 0)
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
                              first_new, still_before, back_pts, reliability, cur_g, prev_g,
-                             disagree=cfg.merge_disagree)
+                             disagree=cfg.merge_disagree, first_moved=self._spans.first)
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
@@ -396,7 +397,7 @@ class MotionBitsSegmenter:
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             standing = standing_still(speed, reliable, cfg.move_threshold)
-            self._still = seen_still(still_seen, standing)
+            self._still = seen_still(still_seen, standing, self.frame_index)
             self._memory.update(cur, cur_g, prev_g, standing)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)

@@ -115,19 +115,23 @@ def test_seen_still_remembers_stillness_and_ignores_unreliable_flow():
     reliable = np.ones((10, 12), bool)
     reliable[:3] = False  # no trustworthy flow on the top rows: not seen at all
     carried = np.zeros((10, 12), np.int32)
-    carried[5:, 8:] = 1  # seen still at an earlier frame
+    carried[5:, 8:] = 3  # last seen still at frame 2
+    carried[:2, :2] = 5  # ... and at frame 4
     out = seen_still(carried, standing_still(cv2.magnitude(flow[..., 0], flow[..., 1]), reliable,
-                                            move_threshold=0.6))
+                                            move_threshold=0.6), frame_index=7)
     assert out.dtype == np.int32
-    assert out[3:, :6].all() and not out[:3, :6].any()
-    assert not out[:5, 6:].any() and out[5:, 8:].all() and not out[5:, 6:8].any()
+    assert (out[3:, :6] == 8).all() and not out[2, :6].any()  # seen still now (frame 7)
+    assert (out[:2, :2] == 5).all()  # not seen now: the carried frame stays
+    assert not out[:5, 6:].any() and (out[5:, 8:] == 3).all() and not out[5:, 6:8].any()
 
 
-@pytest.mark.parametrize("stood_still", [True, False])
-def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(stood_still):
+@pytest.mark.parametrize("last_still, stood_still", [(6, True), (0, False), (3, False)])
+def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(last_still, stood_still):
     """A MotionBit born next to a moving one with the same motion: a block that stood still
-    while the gripper moved is another body for good; a part of the gripper that moved
-    unlabelled is not kept apart (its pair is observed and may agree)."""
+    while the gripper moved (last seen still at frame 5, the gripper moving since frame 4)
+    is another body for good; a part of the gripper that moved unlabelled, or that stood
+    still only before the gripper first moved (frame 2), is not kept apart (its pair is
+    observed and may agree)."""
     rng = np.random.default_rng(1)
     h, w = 80, 120
     prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
@@ -139,10 +143,10 @@ def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(stood_still):
     node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
     back = grid.points - np.array([3.0, 0.0], np.float32)
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
-    still_before = (node_ids == 2) & stood_still
+    still_before = np.where(node_ids == 2, last_still, 0)  # 1 + last frame seen still
     observe_touching(groups, grid, labels, node_ids, np.array([1, 2]), np.zeros(2),
                      np.array([[-3.0, 0.0], [-3.0, 0.0]]), {1, 2}, 2, still_before, back,
-                     np.ones(grid.n), cur, prev, disagree=6.0)
+                     np.ones(grid.n), cur, prev, disagree=6.0, first_moved={1: 4, 2: 8})
     assert groups.known(1, 2) == stood_still
     rep = groups.representatives([1, 2])
     assert (rep[2] == 1) != stood_still
