@@ -67,13 +67,24 @@ def describe_motionbits(seg: Segmentation) -> list[dict[str, Any]]:
     return records
 
 
-def _write_marked(seg: Segmentation, path: "str | os.PathLike") -> str:
+def _marked_path(path: object) -> Path:
+    """``marked_image`` checked before any work: a .png/.jpg path in an existing folder."""
+    if not isinstance(path, (str, os.PathLike)) or not os.fspath(path).strip():
+        raise ValueError(f"marked_image must be a .png or .jpg path, got {path!r}")
     out = Path(os.path.expanduser(os.fspath(path)))
     if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise ValueError(f"marked_image must end in .png or .jpg, got {str(out)!r}")
     if not out.parent.is_dir():
         raise FileNotFoundError(f"folder of marked_image does not exist: {out.parent}")
-    Image.fromarray(draw_marks(seg.frames[-1], seg.label_maps[-1], registry=seg.registry)).save(out)
+    return out
+
+
+def _write_marked(seg: Segmentation, out: Path) -> str:
+    try:
+        Image.fromarray(draw_marks(seg.frames[-1], seg.label_maps[-1], registry=seg.registry)).save(out)
+    except OSError as exc:  # a folder of that name, no permission, a full disk
+        raise ValueError(f"could not write marked_image {out}: {exc.strerror or exc}; "
+                         "give a writable .png or .jpg path") from exc
     return str(out)
 
 
@@ -98,8 +109,10 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
 
     Raises:
         FileNotFoundError: the video (or the folder of ``marked_image``) does not exist.
-        ValueError: a bad argument or an unreadable / too short video.
+        ValueError: a bad argument, an unreadable / too short video, or a ``marked_image``
+            that cannot be written.
     """
+    marked = None if marked_image is None else _marked_path(marked_image)
     seg = segment_window(video, start=start, frames=frames, every=every, n_nodes=n_nodes)
     out: dict[str, Any] = {
         "video": seg.video,
@@ -109,8 +122,8 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
         "seconds": round(seg.seconds, 3),
         "motionbits": describe_motionbits(seg),
     }
-    if marked_image is not None:
-        out["marked_image"] = _write_marked(seg, marked_image)
+    if marked is not None:
+        out["marked_image"] = _write_marked(seg, marked)
     return out
 
 

@@ -81,6 +81,24 @@ def test_bad_arguments(clip, kwargs, words):
         segment_moving_bodies(clip, **{"n_nodes": 100, "frames": 2, **kwargs})
 
 
+@pytest.mark.parametrize("marked, words", [
+    (123, "marked_image must be a .png or .jpg path, got 123"),
+    ("", "marked_image must be a .png or .jpg path, got ''"),
+    (["x.png"], "marked_image must be a .png or .jpg path"),
+    ("x.gif", "must end in .png or .jpg"),
+])
+def test_bad_marked_image_is_refused_before_segmenting(clip, monkeypatch, marked, words):
+    monkeypatch.setattr("demos.tool.segment_window", lambda *a, **k: pytest.fail("segmented first"))
+    with pytest.raises(ValueError, match=words):
+        segment_moving_bodies(clip, marked_image=marked)
+
+
+def test_unwritable_marked_image(clip, tmp_path):
+    (tmp_path / "x.png").mkdir()  # a folder where the image should go
+    with pytest.raises(ValueError, match="could not write marked_image .*x.png"):
+        segment_moving_bodies(clip, n_nodes=100, frames=2, marked_image=tmp_path / "x.png")
+
+
 def test_bad_videos(tmp_path):
     text = tmp_path / "notes.txt"
     text.write_text("not a video")
