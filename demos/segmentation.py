@@ -146,6 +146,10 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
                                  f"{frame.shape[0]} (the most per call); choose fewer with frames= "
                                  "or a larger every=")
             break
+        if frame.shape != (out.frames or [frame])[0].shape:
+            raise ValueError(f"frame {i} is {frame.shape[1]}x{frame.shape[0]} but frame {out.frame_indices[0]} is "
+                             f"{out.frames[0].shape[1]}x{out.frames[0].shape[0]}: all frames of a video or "
+                             "image folder must have the same size")
         result = seg.update(frame)
         out.frame_indices.append(i)
         out.frames.append(frame)

@@ -113,6 +113,16 @@ def test_bad_videos(tmp_path):
         ask_about_motion(str(one), "  ")
 
 
+def test_folder_of_mixed_sizes(tmp_path):
+    from PIL import Image
+
+    for i, (h, w) in enumerate([(64, 64), (64, 64), (48, 80)]):
+        Image.fromarray(np.full((h, w, 3), 40 * i, np.uint8)).save(tmp_path / f"{i}.png")
+    with pytest.raises(ValueError, match="frame 2 is 80x48 but frame 0 is 64x64: all frames .* same size"):
+        segment_moving_bodies(str(tmp_path), n_nodes=100)
+    assert segment_moving_bodies(str(tmp_path), frames=2, n_nodes=100)["frame_indices"] == [0, 1]
+
+
 def test_openai_schema_matches_the_functions():
     tools = {t["function"]["name"]: t["function"] for t in openai_tools()}
     for fn in (segment_moving_bodies, ask_about_motion):
