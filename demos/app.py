@@ -128,6 +128,19 @@ def _window(n: int, size: tuple[int, int], start: int, frames: int, every: int, 
     return count
 
 
+def _whole(label: str, value: object, default: int | None = None) -> int:
+    """A page field as a whole number (None: ``default``); ValueError naming the field."""
+    if value is None and default is not None:
+        return default
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        number = float("nan")
+    if not number.is_integer():  # 'abc', None, nan, inf, 2.5
+        raise ValueError(f"{label} must be a whole number, got {value!r}")
+    return int(number)
+
+
 def _ranges(frames: list[int]) -> str:
     """[1, 2, 3, 7] -> '1-3, 7'."""
     out, run = [], []
@@ -172,9 +185,10 @@ class _Handlers:
         """Segment; returns (overlay mp4, table rows, labels.zip, summary.json, state, status)."""
         empty = (None, [], None, None, None)  # overlay, table, zip, summary, state
         try:
-            start, frames, every, n_nodes = int(start or 0), int(frames or 0), int(every or 1), int(n_nodes)
+            start, frames = _whole("Start frame", start, 0), _whole("Frames", frames, 0)
+            every, n_nodes = _whole("Step", every, 1), _whole("Graph nodes", n_nodes)
             if start < 0 or frames < 0 or every < 1:
-                raise ValueError("start and frames must be >= 0 and step >= 1")
+                raise ValueError(f"start ({start}) and frames ({frames}) must be >= 0 and step ({every}) >= 1")
             n, size, fps = check_video(path, self.config.limits)
             count = _window(n, size, start, frames, every, self.config.limits)
             bar = progress if progress is not None else (lambda *a, **k: None)

@@ -58,6 +58,20 @@ def test_bad_input_is_a_readable_message(tmp_path, clip, case, words):
     assert "\n" not in status and "Traceback" not in status
 
 
+@pytest.mark.parametrize("fields, words", [
+    ({"n_nodes": None}, "Graph nodes must be a whole number, got None"),
+    ({"n_nodes": "many"}, "Graph nodes must be a whole number, got 'many'"),
+    ({"n_nodes": float("inf")}, "Graph nodes must be a whole number, got inf"),
+    ({"start": float("nan")}, "Start frame must be a whole number, got nan"),
+    ({"frames": 2.5}, "Frames must be a whole number, got 2.5"),
+    ({"every": 0}, "step (0) >= 1"),
+    ({"start": -1}, "start (-1) and frames (0) must be >= 0"),
+])
+def test_bad_fields_are_named(tmp_path, clip, fields, words):
+    status = _status_of_run(_handlers(tmp_path), clip, **fields)[5]
+    assert status.startswith("**Error:**") and words in status, status
+
+
 def test_run_then_ask(tmp_path, clip):
     h = _handlers(tmp_path)
     progress = []
