@@ -83,11 +83,14 @@ def check_video(path: str | None, limits: DemoLimits) -> tuple[int, tuple[int, i
     """Check an uploaded file against ``limits``; returns (frame count, (H, W), fps).
 
     Raises:
-        ValueError: no file, not a video, fewer than 2 frames, or over a limit (one line).
+        ValueError: no file, a missing file, not a video, fewer than 2 frames, or over a limit
+            (one line).
     """
     if not path:
         raise ValueError("no video: upload a video file or pick an example")
     p = Path(path)
+    if not p.exists():
+        raise ValueError(f"video not found: {p} (upload it again)")
     size_mb = p.stat().st_size / 1e6
     if size_mb > limits.max_mb:
         raise ValueError(f"{p.name} is {size_mb:.0f} MB, over the limit of {limits.max_mb:g} MB")

@@ -35,6 +35,7 @@ def _status_of_run(h, path, **kw):
 
 @pytest.mark.parametrize("case, words", [
     ("none", "no video"),
+    ("missing", "video not found"),
     ("text", "not a video"),
     ("empty", "not a video"),
     ("one_frame", "has 1 frame"),
@@ -45,7 +46,7 @@ def _status_of_run(h, path, **kw):
 def test_bad_input_is_a_readable_message(tmp_path, clip, case, words):
     limits = {"too_large": DemoLimits(max_side=100), "too_long": DemoLimits(max_frames=3)}
     h = _handlers(tmp_path, limits=limits.get(case, DemoLimits()))
-    paths = {"none": None, "text": tmp_path / "a.txt", "empty": tmp_path / "empty.mp4",
+    paths = {"none": None, "missing": tmp_path / "gone.mp4", "text": tmp_path / "a.txt", "empty": tmp_path / "empty.mp4",
              "one_frame": tmp_path / "one.mp4", "too_large": clip, "window": clip, "too_long": clip}
     (tmp_path / "a.txt").write_text("hello")
     (tmp_path / "empty.mp4").write_bytes(b"")
