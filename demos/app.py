@@ -225,6 +225,8 @@ class _Handlers:
         try:
             if seg is None:
                 raise ValueError("run the segmentation first, then ask")
+            if question is not None and not isinstance(question, str):
+                raise ValueError(f"the question must be text, got {type(question).__name__} {question!r:.40}")
             if not question or not question.strip():
                 raise ValueError("type a question first")
             vlm = None if self.config.vlm == "stub" else self._load_vlm()

@@ -101,6 +101,7 @@ def test_run_then_ask(tmp_path, clip):
 
     assert h.ask(None, "hi")[2].startswith("**Error:** run the segmentation first")
     assert h.ask(seg, " ")[2].startswith("**Error:** type a question")
+    assert h.ask(seg, 5)[2] == "**Error:** the question must be text, got int 5"
 
 
 @pytest.mark.parametrize("vlm, words", [
