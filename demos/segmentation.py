@@ -132,24 +132,31 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
     out = Segmentation(str(path), [], [], [], config=cfg)
     t0 = time.perf_counter()
     cap = MAX_WINDOW_FRAMES
+    window: list[tuple[int, np.ndarray]] = []  # read the whole window first: no segmenting in vain
     for i, frame in enumerate(iter_frames(path)):
         if i < start or (i - start) % every:
             continue
-        if not out.frames:
+        if not window:
             cap = max_frames_for(*frame.shape[:2])
             if frames is not None and frames > cap:
                 raise ValueError(f"frames={frames} is too many at {frame.shape[1]}x{frame.shape[0]}: "
                                  f"at most {cap} frames of this size per call")
-        if len(out.frames) == (frames or cap):
+        if len(window) == (frames or cap):
             if frames is None:
                 raise ValueError(f"the window holds more than {cap} frames of {frame.shape[1]}x"
                                  f"{frame.shape[0]} (the most per call); choose fewer with frames= "
                                  "or a larger every=")
             break
-        if frame.shape != (out.frames or [frame])[0].shape:
-            raise ValueError(f"frame {i} is {frame.shape[1]}x{frame.shape[0]} but frame {out.frame_indices[0]} is "
-                             f"{out.frames[0].shape[1]}x{out.frames[0].shape[0]}: all frames of a video or "
-                             "image folder must have the same size")
+        if window and frame.shape != window[0][1].shape:
+            first, shape = window[0][0], window[0][1].shape
+            raise ValueError(f"frame {i} is {frame.shape[1]}x{frame.shape[0]} but frame {first} is "
+                             f"{shape[1]}x{shape[0]}: all frames of a video or image folder must have "
+                             "the same size")
+        window.append((i, frame))
+    if len(window) < 2:
+        where = f"from frame {start} with every={every}" if start or every > 1 else "in the video"
+        raise ValueError(f"need at least 2 frames to see motion, found {len(window)} {where}")
+    for i, frame in window:
         result = seg.update(frame)
         out.frame_indices.append(i)
         out.frames.append(frame)
@@ -161,7 +168,4 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
         if progress is not None:
             progress(len(out.frames), frames)
     out.seconds = time.perf_counter() - t0
-    if len(out.frames) < 2:
-        where = f"from frame {start} with every={every}" if start or every > 1 else "in the video"
-        raise ValueError(f"need at least 2 frames to see motion, found {len(out.frames)} {where}")
     return out

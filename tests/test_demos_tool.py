@@ -158,3 +158,21 @@ def test_window_memory_limit(clip, monkeypatch):
         segment_moving_bodies(clip, frames=5, n_nodes=100)
     with pytest.raises(ValueError, match="more than 3 frames of 320x240"):
         segment_moving_bodies(clip, n_nodes=100)
+
+
+def test_window_errors_come_before_segmenting(clip, monkeypatch):
+    import demos.segmentation
+
+    class Refuses:
+        def __init__(self, config):
+            pass
+
+        def update(self, frame):
+            pytest.fail("segmented before the window was checked")
+
+    monkeypatch.setattr(demos.segmentation, "MotionBitsSegmenter", Refuses)
+    monkeypatch.setattr(demos.segmentation, "MAX_WINDOW_PIXELS", 3 * SIZE[0] * SIZE[1])
+    with pytest.raises(ValueError, match="more than 3 frames of 320x240"):
+        segment_moving_bodies(clip, n_nodes=100)
+    with pytest.raises(ValueError, match="found 1 from frame 7"):
+        segment_moving_bodies(clip, start=7, n_nodes=100)
