@@ -163,7 +163,7 @@ def highlight(seg: Segmentation, ids: list[int], dim: float = 0.35) -> np.ndarra
     Returns (H, W, 3) uint8 RGB; the marks use the numbers and colours of the overlay.
     """
     frame, labels = seg.frames[-1], seg.label_maps[-1]
-    keep = np.isin(labels, np.asarray(ids, dtype=labels.dtype)) if ids else np.zeros(labels.shape, bool)
+    keep = np.isin(labels, np.asarray(ids, dtype=np.int64)) if len(ids) else np.zeros(labels.shape, bool)
     marked = draw_marks(frame, np.where(keep, labels, 0), registry=seg.registry)
     out = (frame.astype(np.float32) * dim).astype(np.uint8)
     # marks (numbers, outlines) may extend past the masks: keep every pixel they changed

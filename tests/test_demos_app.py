@@ -98,6 +98,8 @@ def test_run_then_ask(tmp_path, clip):
     inside = seg.label_maps[-1] == largest["id"]
     assert np.array_equal(image[inside], highlight(seg, [largest["id"]])[inside])
     assert image[~inside].mean() < 0.5 * seg.frames[-1][~inside].mean()  # the rest is dimmed
+    # ids that are in no label map (beyond int32 too) mark nothing
+    assert np.array_equal(highlight(seg, [2**40, -1]), highlight(seg, []))
 
     assert h.ask(None, "hi")[2].startswith("**Error:** run the segmentation first")
     assert h.ask(seg, " ")[2].startswith("**Error:** type a question")
