@@ -144,7 +144,9 @@ def ask_about_motion(video: "str | os.PathLike", question: str, *, vlm: "str | A
         ``{"question", "answer", "cited": [{"mark", "id", "area", "box"}], "vlm"}``.
 
     Raises:
-        ValueError: an empty question, a bad argument or an unusable VLM spec.
+        FileNotFoundError: the video does not exist.
+        ValueError: an empty question, a bad argument or an unreadable / too short video.
+        VLMError: an unusable VLM spec, or the VLM failed or answered no text.
     """
     if not isinstance(question, str) or not question.strip():
         raise ValueError("question must be a non-empty string")
@@ -176,17 +178,34 @@ def answer_question(seg: Segmentation, question: str, vlm: "str | Any | None" = 
     """GroundedVQA on an already segmented window (``seg``'s label maps, no second run).
 
     ``vlm`` as in :func:`ask_about_motion`; ``max_new_tokens`` caps the answer (None: the
-    VLM's default).
+    VLM's default). Raises VLMError when the VLM cannot be built, fails or answers no text.
     """
     if vlm is None or isinstance(vlm, str):
         vlm = make_vlm(vlm or "stub", stub_text=stub_answer(seg.label_maps))
+    elif not callable(getattr(vlm, "generate", None)):
+        raise TypeError(f"vlm must be a VLM spec or have generate(frames, prompt, system=None), "
+                        f"got {type(vlm).__name__}")
     generation = {} if max_new_tokens is None else {"max_new_tokens": int(max_new_tokens)}
-    vqa = GroundedVQA(lambda frames: seg.label_maps, vlm, generation=generation)
-    try:
-        res = vqa(seg.frames, question=question)
-    except (ConnectionError, TimeoutError, RuntimeError) as exc:  # endpoint down, model error
-        raise VLMError(f"the VLM did not answer: {' '.join(str(exc).split())}") from exc
+    res = GroundedVQA(lambda frames: seg.label_maps, _Failing(vlm), generation=generation)(
+        seg.frames, question=question)
     return Answer(res.answer, res.cited_ids, res.masks, vlm)
+
+
+class _Failing:
+    """``vlm`` whose every failure is a VLMError: an exception in ``generate`` (endpoint
+    down, model or processor error) or an answer that is not text (None, a dict)."""
+
+    def __init__(self, vlm: Any):
+        self.vlm = vlm
+
+    def generate(self, frames: list, prompt: str, system: str | None = None, **gen: Any) -> str:
+        try:
+            answer = self.vlm.generate(frames, prompt, system=system, **gen)
+        except Exception as exc:
+            raise VLMError(f"the VLM did not answer: {' '.join(str(exc).split()) or type(exc).__name__}") from exc
+        if not isinstance(answer, str):
+            raise VLMError(f"the VLM did not answer: it returned {type(answer).__name__}, not text")
+        return answer
 
 
 def cited_records(seg: Segmentation, ids: list[int]) -> list[dict[str, Any]]:

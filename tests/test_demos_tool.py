@@ -148,6 +148,25 @@ def test_vlm_choice_errors(tmp_path, clip):
         answer_question(seg, "What moved?", down)
     scripted = answer_question(seg, "What moved?", "stub:Nothing, really.")
     assert scripted.answer == "Nothing, really." and scripted.cited_ids == []
+    for fails, words in [(None, "it returned NoneType, not text"), ({"answer": "[1]"}, "returned dict"),
+                         (ValueError("height:16 must be larger than factor:28"), "larger than factor"),
+                         (KeyError("choices"), "'choices'")]:
+        with pytest.raises(VLMError, match=f"the VLM did not answer: .*{words}"):
+            answer_question(seg, "What moved?", _Scripted(fails))
+    with pytest.raises(TypeError, match="vlm must be a VLM spec or have generate"):
+        answer_question(seg, "What moved?", 5)
+
+
+class _Scripted:
+    """A VLM that returns, or raises, what it is given."""
+
+    def __init__(self, out):
+        self.out = out
+
+    def generate(self, frames, prompt, system=None, **gen):
+        if isinstance(self.out, Exception):
+            raise self.out
+        return self.out
 
 
 def test_window_memory_limit(clip, monkeypatch):
