@@ -136,8 +136,11 @@ def test_openai_schema_matches_the_functions():
 
 
 def test_vlm_choice_errors(tmp_path, clip):
-    with pytest.raises(VLMError, match="cannot read VLM spec"):
+    with pytest.raises(VLMError, match="could not load the VLM 'nonsense': cannot read VLM spec"):
         make_vlm("nonsense")
+    with pytest.raises(VLMError, match="a VLM spec is a string"):
+        make_vlm(5)
+    assert make_vlm("  ").name == make_vlm(" STUB ").name == "stub"
     with pytest.raises(VLMError, match="not a transformers model folder"):
         make_vlm(str(tmp_path))
     with pytest.raises(VLMError, match="could not load"):
