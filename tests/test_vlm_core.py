@@ -107,6 +107,10 @@ def test_stub_vlm_scripts_and_records():
     assert [(c.num_frames, c.frame_size, c.prompt, c.system) for c in vlm.calls[:2]] == [
         (3, (6, 8), "q1", None), (1, (6, 8), "q2", "s")]
     assert StubVLM(lambda fr, p: f"{len(fr)}:{p}").generate_batch([frames, frames[:2]], "q") == ["3:q", "2:q"]
+    with pytest.raises(TypeError, match="script returned NoneType, not str"):  # not the answer "None"
+        StubVLM(lambda fr, p: None).generate(frames, "q")
+    with pytest.raises(TypeError, match="responses must be strings, got NoneType"):
+        StubVLM(["fine", None])
     once = StubVLM(["only"], cycle=False)
     once.generate(frames, "q")
     with pytest.raises(IndexError):
