@@ -180,6 +180,9 @@ def test_masks_to_label_map_order_and_overlap():
     assert set(np.unique(masks_to_label_map(hidden, [0.9, 0.1]))) == {0, 1}
     assert masks_to_label_map(masks, [0.5, 0.9, 0.7], max_instances=1).max() == 1
     assert masks_to_label_map(np.zeros((0, 4, 5), bool)).shape == (4, 5)
+    for scores in ([0.9], [0.5, 0.9, 0.7, 0.1], [[0.5, 0.9, 0.7]]):  # not one score per mask
+        with pytest.raises(ValueError, match="3 masks but scores of shape"):
+            masks_to_label_map(masks, scores)
 
 
 class _BoxDetector:

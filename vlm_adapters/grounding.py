@@ -115,6 +115,8 @@ def masks_to_label_map(
     if masks.ndim != 3:
         raise ValueError(f"masks must be (K, H, W), got shape {masks.shape}")
     k, h, w = masks.shape
+    if scores is not None and np.shape(scores) != (k,):
+        raise ValueError(f"{k} masks but scores of shape {np.shape(scores)}; give one score per mask")
     labels = np.zeros((h, w), np.int32)
     order = np.arange(k) if scores is None else np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
     next_label = 1
