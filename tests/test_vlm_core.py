@@ -213,6 +213,13 @@ def test_text_grounder_with_stub_detector_places_labels_exactly():
     np.testing.assert_array_equal(labels, expected)
     assert grounder.ground("- none: nothing moved", image).max() == 0
     assert det.seen[-1] == ["red block", "drawer", "ghost"]  # no detector call for an empty list
+    # a detector's wrong result is an error, not a label map of another size
+    grounder.detector.detect = lambda image, phrases: Detections(np.ones((1, 48, 64), bool), [0.9], ["x"])
+    with pytest.raises(ValueError, match="returned masks of 64x48 for an image of 32x24"):
+        grounder.ground("- red block: cube", image)
+    grounder.detector.detect = lambda image, phrases: None
+    with pytest.raises(TypeError, match="_BoxDetector.detect must return Detections, got NoneType"):
+        grounder.ground("- red block: cube", image)
 
 
 def test_vlm_yoloe_method_end_to_end_with_stubs():

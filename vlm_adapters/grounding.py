@@ -355,7 +355,14 @@ class TextGrounder:
         phrases = self.phrases(text)
         if not phrases:
             return Detections.empty(*rgb.shape[:2])
-        return self.detector.detect(rgb, phrases)
+        det = self.detector.detect(rgb, phrases)
+        name = type(self.detector).__name__
+        if not isinstance(det, Detections):
+            raise TypeError(f"{name}.detect must return Detections, got {type(det).__name__}")
+        if det.masks.shape[1:] != rgb.shape[:2]:
+            raise ValueError(f"{name}.detect returned masks of {det.masks.shape[2]}x{det.masks.shape[1]} for an "
+                             f"image of {rgb.shape[1]}x{rgb.shape[0]}; masks must have the image's size")
+        return det
 
     def ground(self, text: str, image: Frame) -> np.ndarray:
         """(H, W) int32 label map of the objects named in `text` (0 = background, 1..K)."""
