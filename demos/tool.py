@@ -98,7 +98,7 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
         start: first frame used (0-based).
         frames: number of frames used (>= 2; None: to the end of the video).
         every: use every ``every``-th frame.
-        n_nodes: graph nodes (more: finer masks, slower).
+        n_nodes: graph nodes (more: finer masks, slower; at most ``MAX_NODES``, 40,000).
         marked_image: if given, a .png/.jpg path where the last frame is written with the
             numbered marks (to show a VLM); returned as ``marked_image``.
 

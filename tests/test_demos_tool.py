@@ -16,7 +16,7 @@ from pycocotools import mask as coco_mask  # noqa: E402
 
 from demos import VLMError, ask_about_motion, make_vlm, openai_tools, segment_moving_bodies  # noqa: E402
 from demos.media import write_demo_clip  # noqa: E402
-from demos.segmentation import segment_window  # noqa: E402
+from demos.segmentation import MAX_NODES, segment_window  # noqa: E402
 from demos.tool import answer_question  # noqa: E402
 from motionbits import grasp_from_mask  # noqa: E402
 from motionbits.video_writer import write_h264  # noqa: E402
@@ -72,6 +72,7 @@ def test_twist_of_the_translating_quad(result):
     ({"every": 0}, "every must be >= 1"),
     ({"frames": 1}, "frames must be >= 2"),
     ({"n_nodes": "many"}, "n_nodes must be an integer"),
+    ({"n_nodes": 1_000_000}, "n_nodes must be <= 40000"),  # would run out of memory
     ({"start": 100}, "need at least 2 frames"),
     ({"marked_image": "/nonexistent/dir/x.png"}, "does not exist"),
     ({"marked_image": "x.gif"}, "must end in .png or .jpg"),
@@ -130,6 +131,7 @@ def test_openai_schema_matches_the_functions():
         schema = tools[fn.__name__]["parameters"]
         assert set(schema["properties"]) == set(params) - {"vlm"}  # the VLM is the server's choice
         assert set(schema["required"]) == {n for n, p in params.items() if p.default is p.empty}
+        assert schema["properties"]["n_nodes"]["maximum"] == MAX_NODES
         for name, prop in schema["properties"].items():
             if "default" in prop:
                 assert prop["default"] == params[name].default, name
