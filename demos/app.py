@@ -83,11 +83,14 @@ def check_video(path: str | None, limits: DemoLimits) -> tuple[int, tuple[int, i
     """Check an uploaded file against ``limits``; returns (frame count, (H, W), fps).
 
     Raises:
-        ValueError: no file, not a video, fewer than 2 frames, or over a limit (one line).
+        ValueError: no file, a missing file, not a video, fewer than 2 frames, or over a limit
+            (one line).
     """
     if not path:
         raise ValueError("no video: upload a video file or pick an example")
     p = Path(path)
+    if not p.exists():
+        raise ValueError(f"video not found: {p} (upload it again)")
     size_mb = p.stat().st_size / 1e6
     if size_mb > limits.max_mb:
         raise ValueError(f"{p.name} is {size_mb:.0f} MB, over the limit of {limits.max_mb:g} MB")
@@ -128,6 +131,19 @@ def _window(n: int, size: tuple[int, int], start: int, frames: int, every: int, 
     return count
 
 
+def _whole(label: str, value: object, default: int | None = None) -> int:
+    """A page field as a whole number (None: ``default``); ValueError naming the field."""
+    if value is None and default is not None:
+        return default
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        number = float("nan")
+    if not number.is_integer():  # 'abc', None, nan, inf, 2.5
+        raise ValueError(f"{label} must be a whole number, got {value!r}")
+    return int(number)
+
+
 def _ranges(frames: list[int]) -> str:
     """[1, 2, 3, 7] -> '1-3, 7'."""
     out, run = [], []
@@ -147,7 +163,7 @@ def highlight(seg: Segmentation, ids: list[int], dim: float = 0.35) -> np.ndarra
     Returns (H, W, 3) uint8 RGB; the marks use the numbers and colours of the overlay.
     """
     frame, labels = seg.frames[-1], seg.label_maps[-1]
-    keep = np.isin(labels, np.asarray(ids, dtype=labels.dtype)) if ids else np.zeros(labels.shape, bool)
+    keep = np.isin(labels, np.asarray(ids, dtype=np.int64)) if len(ids) else np.zeros(labels.shape, bool)
     marked = draw_marks(frame, np.where(keep, labels, 0), registry=seg.registry)
     out = (frame.astype(np.float32) * dim).astype(np.uint8)
     # marks (numbers, outlines) may extend past the masks: keep every pixel they changed
@@ -172,9 +188,10 @@ class _Handlers:
         """Segment; returns (overlay mp4, table rows, labels.zip, summary.json, state, status)."""
         empty = (None, [], None, None, None)  # overlay, table, zip, summary, state
         try:
-            start, frames, every, n_nodes = int(start or 0), int(frames or 0), int(every or 1), int(n_nodes)
+            start, frames = _whole("Start frame", start, 0), _whole("Frames", frames, 0)
+            every, n_nodes = _whole("Step", every, 1), _whole("Graph nodes", n_nodes)
             if start < 0 or frames < 0 or every < 1:
-                raise ValueError("start and frames must be >= 0 and step >= 1")
+                raise ValueError(f"start ({start}) and frames ({frames}) must be >= 0 and step ({every}) >= 1")
             n, size, fps = check_video(path, self.config.limits)
             count = _window(n, size, start, frames, every, self.config.limits)
             bar = progress if progress is not None else (lambda *a, **k: None)
@@ -208,6 +225,8 @@ class _Handlers:
         try:
             if seg is None:
                 raise ValueError("run the segmentation first, then ask")
+            if question is not None and not isinstance(question, str):
+                raise ValueError(f"the question must be text, got {type(question).__name__} {question!r:.40}")
             if not question or not question.strip():
                 raise ValueError("type a question first")
             vlm = None if self.config.vlm == "stub" else self._load_vlm()

@@ -19,6 +19,7 @@ from pydantic import Field
 from motionbits import MotionBitsConfig
 
 from .schema import ASK_ABOUT_MOTION, SEGMENT_MOVING_BODIES
+from .segmentation import MAX_NODES
 from .tool import ask_about_motion, segment_moving_bodies
 from .vlm import VLMError, make_vlm, vlm_spec_help
 
@@ -31,7 +32,7 @@ Video = Annotated[str, Field(description=_P["video"]["description"])]
 Start = Annotated[int, Field(ge=0, description=_P["start"]["description"])]
 Frames = Annotated["int | None", Field(ge=2, description=_P["frames"]["description"])]
 Every = Annotated[int, Field(ge=1, description=_P["every"]["description"])]
-Nodes = Annotated[int, Field(ge=16, description=_P["n_nodes"]["description"])]
+Nodes = Annotated[int, Field(ge=16, le=MAX_NODES, description=_P["n_nodes"]["description"])]
 Marked = Annotated["str | None", Field(description=_P["marked_image"]["description"])]
 Question = Annotated[str, Field(description=_Q["question"]["description"])]
 

@@ -11,6 +11,8 @@ from typing import Any
 
 from motionbits import MotionBitsConfig
 
+from .segmentation import MAX_NODES
+
 __all__ = ["ASK_ABOUT_MOTION", "SEGMENT_MOVING_BODIES", "openai_tools"]
 
 _WINDOW = {
@@ -20,7 +22,7 @@ _WINDOW = {
                "description": "Number of frames used; null = to the end of the video."},
     "every": {"type": "integer", "minimum": 1, "default": 1,
               "description": "Use every k-th frame."},
-    "n_nodes": {"type": "integer", "minimum": 16, "default": MotionBitsConfig.n_nodes,
+    "n_nodes": {"type": "integer", "minimum": 16, "maximum": MAX_NODES, "default": MotionBitsConfig.n_nodes,
                 "description": "Graph nodes of the segmenter: more = finer masks, slower."},
 }
 

@@ -14,7 +14,7 @@ import numpy as np
 from motionbits import MotionBitsConfig, MotionBitsSegmenter, iter_frames
 from somprompt import MarkRegistry
 
-__all__ = ["MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_window", "max_frames_for",
+__all__ = ["MAX_NODES", "MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_window", "max_frames_for",
            "segment_window"]
 
 #: Most frames one call processes (frames and label maps are kept in memory and returned) ...
@@ -22,6 +22,10 @@ MAX_WINDOW_FRAMES = 300
 #: ... and most pixels over all of them: 300 frames of 480x640, 44 of 1920x1080 (about
 #: 7 bytes a pixel are kept: RGB and an int32 label).
 MAX_WINDOW_PIXELS = 300 * 480 * 640
+#: Most graph nodes one call may ask for (a 200 x 200 grid, four times the default): time and
+#: memory grow fast beyond (100,000 nodes: over 2 minutes and 2 GB for 3 frames of a 16x16
+#: clip; 1,000,000: out of memory).
+MAX_NODES = 40_000
 
 
 def max_frames_for(height: int, width: int) -> int:
@@ -91,6 +95,8 @@ def check_window(start: object = 0, frames: object = None, every: object = 1,
     n = _int_arg("n_nodes", n_nodes, 16)
     if f is not None and f > MAX_WINDOW_FRAMES:
         raise ValueError(f"frames must be <= {MAX_WINDOW_FRAMES}, got {f}")
+    if n > MAX_NODES:
+        raise ValueError(f"n_nodes must be <= {MAX_NODES}, got {n}")
     return s, f, e, n
 
 
@@ -115,7 +121,8 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
         frames: how many frames to use (>= 2; None: to the end). At most
             ``max_frames_for(H, W)`` frames (``MAX_WINDOW_FRAMES``, fewer for large frames).
         every: use every ``every``-th frame.
-        n_nodes: graph nodes of the segmenter (``MotionBitsConfig.n_nodes``).
+        n_nodes: graph nodes of the segmenter (``MotionBitsConfig.n_nodes``), at most
+            ``MAX_NODES``.
         config: other segmenter parameters (``n_nodes`` overrides its field).
         progress: called as ``progress(done, total)`` after each frame (``total`` is None
             when ``frames`` is None).
@@ -132,20 +139,31 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
     out = Segmentation(str(path), [], [], [], config=cfg)
     t0 = time.perf_counter()
     cap = MAX_WINDOW_FRAMES
+    window: list[tuple[int, np.ndarray]] = []  # read the whole window first: no segmenting in vain
     for i, frame in enumerate(iter_frames(path)):
         if i < start or (i - start) % every:
             continue
-        if not out.frames:
+        if not window:
             cap = max_frames_for(*frame.shape[:2])
             if frames is not None and frames > cap:
                 raise ValueError(f"frames={frames} is too many at {frame.shape[1]}x{frame.shape[0]}: "
                                  f"at most {cap} frames of this size per call")
-        if len(out.frames) == (frames or cap):
+        if len(window) == (frames or cap):
             if frames is None:
                 raise ValueError(f"the window holds more than {cap} frames of {frame.shape[1]}x"
                                  f"{frame.shape[0]} (the most per call); choose fewer with frames= "
                                  "or a larger every=")
             break
+        if window and frame.shape != window[0][1].shape:
+            first, shape = window[0][0], window[0][1].shape
+            raise ValueError(f"frame {i} is {frame.shape[1]}x{frame.shape[0]} but frame {first} is "
+                             f"{shape[1]}x{shape[0]}: all frames of a video or image folder must have "
+                             "the same size")
+        window.append((i, frame))
+    if len(window) < 2:
+        where = f"from frame {start} with every={every}" if start or every > 1 else "in the video"
+        raise ValueError(f"need at least 2 frames to see motion, found {len(window)} {where}")
+    for i, frame in window:
         result = seg.update(frame)
         out.frame_indices.append(i)
         out.frames.append(frame)
@@ -157,7 +175,4 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
         if progress is not None:
             progress(len(out.frames), frames)
     out.seconds = time.perf_counter() - t0
-    if len(out.frames) < 2:
-        where = f"from frame {start} with every={every}" if start or every > 1 else "in the video"
-        raise ValueError(f"need at least 2 frames to see motion, found {len(out.frames)} {where}")
     return out

@@ -67,13 +67,24 @@ def describe_motionbits(seg: Segmentation) -> list[dict[str, Any]]:
     return records
 
 
-def _write_marked(seg: Segmentation, path: "str | os.PathLike") -> str:
+def _marked_path(path: object) -> Path:
+    """``marked_image`` checked before any work: a .png/.jpg path in an existing folder."""
+    if not isinstance(path, (str, os.PathLike)) or not os.fspath(path).strip():
+        raise ValueError(f"marked_image must be a .png or .jpg path, got {path!r}")
     out = Path(os.path.expanduser(os.fspath(path)))
     if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise ValueError(f"marked_image must end in .png or .jpg, got {str(out)!r}")
     if not out.parent.is_dir():
         raise FileNotFoundError(f"folder of marked_image does not exist: {out.parent}")
-    Image.fromarray(draw_marks(seg.frames[-1], seg.label_maps[-1], registry=seg.registry)).save(out)
+    return out
+
+
+def _write_marked(seg: Segmentation, out: Path) -> str:
+    try:
+        Image.fromarray(draw_marks(seg.frames[-1], seg.label_maps[-1], registry=seg.registry)).save(out)
+    except OSError as exc:  # a folder of that name, no permission, a full disk
+        raise ValueError(f"could not write marked_image {out}: {exc.strerror or exc}; "
+                         "give a writable .png or .jpg path") from exc
     return str(out)
 
 
@@ -87,7 +98,7 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
         start: first frame used (0-based).
         frames: number of frames used (>= 2; None: to the end of the video).
         every: use every ``every``-th frame.
-        n_nodes: graph nodes (more: finer masks, slower).
+        n_nodes: graph nodes (more: finer masks, slower; at most ``MAX_NODES``, 40,000).
         marked_image: if given, a .png/.jpg path where the last frame is written with the
             numbered marks (to show a VLM); returned as ``marked_image``.
 
@@ -98,8 +109,10 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
 
     Raises:
         FileNotFoundError: the video (or the folder of ``marked_image``) does not exist.
-        ValueError: a bad argument or an unreadable / too short video.
+        ValueError: a bad argument, an unreadable / too short video, or a ``marked_image``
+            that cannot be written.
     """
+    marked = None if marked_image is None else _marked_path(marked_image)
     seg = segment_window(video, start=start, frames=frames, every=every, n_nodes=n_nodes)
     out: dict[str, Any] = {
         "video": seg.video,
@@ -109,8 +122,8 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
         "seconds": round(seg.seconds, 3),
         "motionbits": describe_motionbits(seg),
     }
-    if marked_image is not None:
-        out["marked_image"] = _write_marked(seg, marked_image)
+    if marked is not None:
+        out["marked_image"] = _write_marked(seg, marked)
     return out
 
 
@@ -131,7 +144,9 @@ def ask_about_motion(video: "str | os.PathLike", question: str, *, vlm: "str | A
         ``{"question", "answer", "cited": [{"mark", "id", "area", "box"}], "vlm"}``.
 
     Raises:
-        ValueError: an empty question, a bad argument or an unusable VLM spec.
+        FileNotFoundError: the video does not exist.
+        ValueError: an empty question, a bad argument or an unreadable / too short video.
+        VLMError: an unusable VLM spec, or the VLM failed or answered no text.
     """
     if not isinstance(question, str) or not question.strip():
         raise ValueError("question must be a non-empty string")
@@ -163,17 +178,34 @@ def answer_question(seg: Segmentation, question: str, vlm: "str | Any | None" = 
     """GroundedVQA on an already segmented window (``seg``'s label maps, no second run).
 
     ``vlm`` as in :func:`ask_about_motion`; ``max_new_tokens`` caps the answer (None: the
-    VLM's default).
+    VLM's default). Raises VLMError when the VLM cannot be built, fails or answers no text.
     """
     if vlm is None or isinstance(vlm, str):
         vlm = make_vlm(vlm or "stub", stub_text=stub_answer(seg.label_maps))
+    elif not callable(getattr(vlm, "generate", None)):
+        raise TypeError(f"vlm must be a VLM spec or have generate(frames, prompt, system=None), "
+                        f"got {type(vlm).__name__}")
     generation = {} if max_new_tokens is None else {"max_new_tokens": int(max_new_tokens)}
-    vqa = GroundedVQA(lambda frames: seg.label_maps, vlm, generation=generation)
-    try:
-        res = vqa(seg.frames, question=question)
-    except (ConnectionError, TimeoutError, RuntimeError) as exc:  # endpoint down, model error
-        raise VLMError(f"the VLM did not answer: {' '.join(str(exc).split())}") from exc
+    res = GroundedVQA(lambda frames: seg.label_maps, _Failing(vlm), generation=generation)(
+        seg.frames, question=question)
     return Answer(res.answer, res.cited_ids, res.masks, vlm)
+
+
+class _Failing:
+    """``vlm`` whose every failure is a VLMError: an exception in ``generate`` (endpoint
+    down, model or processor error) or an answer that is not text (None, a dict)."""
+
+    def __init__(self, vlm: Any):
+        self.vlm = vlm
+
+    def generate(self, frames: list, prompt: str, system: str | None = None, **gen: Any) -> str:
+        try:
+            answer = self.vlm.generate(frames, prompt, system=system, **gen)
+        except Exception as exc:
+            raise VLMError(f"the VLM did not answer: {' '.join(str(exc).split()) or type(exc).__name__}") from exc
+        if not isinstance(answer, str):
+            raise VLMError(f"the VLM did not answer: it returned {type(answer).__name__}, not text")
+        return answer
 
 
 def cited_records(seg: Segmentation, ids: list[int]) -> list[dict[str, Any]]:

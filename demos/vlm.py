@@ -74,10 +74,12 @@ def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float
             failed (the message says why in one line).
     """
     from vlm_adapters import OpenAICompatibleVLM, StubVLM
-    from vlm_adapters.plugin import load_vlm, parse_vlm_spec
+    from vlm_adapters.plugin import METHOD_NAME, load_vlm, parse_vlm_spec
 
-    spec = (spec or "stub").strip()
-    if spec == "stub":
+    if spec is not None and not isinstance(spec, str):
+        raise VLMError(f"a VLM spec is a string ({vlm_spec_help()}), got {type(spec).__name__} {spec!r:.40}")
+    spec = (spec or "").strip() or "stub"
+    if spec.lower() == "stub":
         return StubVLM(stub_text or "Stub VLM (scripted, it does not look at the video).")
     expanded = os.path.expanduser(spec)
     if os.path.isdir(expanded):
@@ -92,4 +94,5 @@ def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float
         return load_vlm(spec)
     except Exception as exc:  # any loader failure becomes one readable line
         msg = " ".join(str(exc).split()) or type(exc).__name__
+        msg = msg.removeprefix(f"{METHOD_NAME} option 'vlm': ")  # the benchmark's wording, not ours
         raise VLMError(f"could not load the VLM {spec!r}: {msg}") from exc

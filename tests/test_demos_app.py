@@ -35,6 +35,7 @@ def _status_of_run(h, path, **kw):
 
 @pytest.mark.parametrize("case, words", [
     ("none", "no video"),
+    ("missing", "video not found"),
     ("text", "not a video"),
     ("empty", "not a video"),
     ("one_frame", "has 1 frame"),
@@ -45,7 +46,7 @@ def _status_of_run(h, path, **kw):
 def test_bad_input_is_a_readable_message(tmp_path, clip, case, words):
     limits = {"too_large": DemoLimits(max_side=100), "too_long": DemoLimits(max_frames=3)}
     h = _handlers(tmp_path, limits=limits.get(case, DemoLimits()))
-    paths = {"none": None, "text": tmp_path / "a.txt", "empty": tmp_path / "empty.mp4",
+    paths = {"none": None, "missing": tmp_path / "gone.mp4", "text": tmp_path / "a.txt", "empty": tmp_path / "empty.mp4",
              "one_frame": tmp_path / "one.mp4", "too_large": clip, "window": clip, "too_long": clip}
     (tmp_path / "a.txt").write_text("hello")
     (tmp_path / "empty.mp4").write_bytes(b"")
@@ -56,6 +57,20 @@ def test_bad_input_is_a_readable_message(tmp_path, clip, case, words):
     status = out[5]
     assert status.startswith("**Error:**") and words in status, status
     assert "\n" not in status and "Traceback" not in status
+
+
+@pytest.mark.parametrize("fields, words", [
+    ({"n_nodes": None}, "Graph nodes must be a whole number, got None"),
+    ({"n_nodes": "many"}, "Graph nodes must be a whole number, got 'many'"),
+    ({"n_nodes": float("inf")}, "Graph nodes must be a whole number, got inf"),
+    ({"start": float("nan")}, "Start frame must be a whole number, got nan"),
+    ({"frames": 2.5}, "Frames must be a whole number, got 2.5"),
+    ({"every": 0}, "step (0) >= 1"),
+    ({"start": -1}, "start (-1) and frames (0) must be >= 0"),
+])
+def test_bad_fields_are_named(tmp_path, clip, fields, words):
+    status = _status_of_run(_handlers(tmp_path), clip, **fields)[5]
+    assert status.startswith("**Error:**") and words in status, status
 
 
 def test_run_then_ask(tmp_path, clip):
@@ -83,9 +98,12 @@ def test_run_then_ask(tmp_path, clip):
     inside = seg.label_maps[-1] == largest["id"]
     assert np.array_equal(image[inside], highlight(seg, [largest["id"]])[inside])
     assert image[~inside].mean() < 0.5 * seg.frames[-1][~inside].mean()  # the rest is dimmed
+    # ids that are in no label map (beyond int32 too) mark nothing
+    assert np.array_equal(highlight(seg, [2**40, -1]), highlight(seg, []))
 
     assert h.ask(None, "hi")[2].startswith("**Error:** run the segmentation first")
     assert h.ask(seg, " ")[2].startswith("**Error:** type a question")
+    assert h.ask(seg, 5)[2] == "**Error:** the question must be text, got int 5"
 
 
 @pytest.mark.parametrize("vlm, words", [

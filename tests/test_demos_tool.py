@@ -16,7 +16,7 @@ from pycocotools import mask as coco_mask  # noqa: E402
 
 from demos import VLMError, ask_about_motion, make_vlm, openai_tools, segment_moving_bodies  # noqa: E402
 from demos.media import write_demo_clip  # noqa: E402
-from demos.segmentation import segment_window  # noqa: E402
+from demos.segmentation import MAX_NODES, segment_window  # noqa: E402
 from demos.tool import answer_question  # noqa: E402
 from motionbits import grasp_from_mask  # noqa: E402
 from motionbits.video_writer import write_h264  # noqa: E402
@@ -72,6 +72,7 @@ def test_twist_of_the_translating_quad(result):
     ({"every": 0}, "every must be >= 1"),
     ({"frames": 1}, "frames must be >= 2"),
     ({"n_nodes": "many"}, "n_nodes must be an integer"),
+    ({"n_nodes": 1_000_000}, "n_nodes must be <= 40000"),  # would run out of memory
     ({"start": 100}, "need at least 2 frames"),
     ({"marked_image": "/nonexistent/dir/x.png"}, "does not exist"),
     ({"marked_image": "x.gif"}, "must end in .png or .jpg"),
@@ -79,6 +80,24 @@ def test_twist_of_the_translating_quad(result):
 def test_bad_arguments(clip, kwargs, words):
     with pytest.raises((ValueError, FileNotFoundError), match=words):
         segment_moving_bodies(clip, **{"n_nodes": 100, "frames": 2, **kwargs})
+
+
+@pytest.mark.parametrize("marked, words", [
+    (123, "marked_image must be a .png or .jpg path, got 123"),
+    ("", "marked_image must be a .png or .jpg path, got ''"),
+    (["x.png"], "marked_image must be a .png or .jpg path"),
+    ("x.gif", "must end in .png or .jpg"),
+])
+def test_bad_marked_image_is_refused_before_segmenting(clip, monkeypatch, marked, words):
+    monkeypatch.setattr("demos.tool.segment_window", lambda *a, **k: pytest.fail("segmented first"))
+    with pytest.raises(ValueError, match=words):
+        segment_moving_bodies(clip, marked_image=marked)
+
+
+def test_unwritable_marked_image(clip, tmp_path):
+    (tmp_path / "x.png").mkdir()  # a folder where the image should go
+    with pytest.raises(ValueError, match="could not write marked_image .*x.png"):
+        segment_moving_bodies(clip, n_nodes=100, frames=2, marked_image=tmp_path / "x.png")
 
 
 def test_bad_videos(tmp_path):
@@ -95,6 +114,16 @@ def test_bad_videos(tmp_path):
         ask_about_motion(str(one), "  ")
 
 
+def test_folder_of_mixed_sizes(tmp_path):
+    from PIL import Image
+
+    for i, (h, w) in enumerate([(64, 64), (64, 64), (48, 80)]):
+        Image.fromarray(np.full((h, w, 3), 40 * i, np.uint8)).save(tmp_path / f"{i}.png")
+    with pytest.raises(ValueError, match="frame 2 is 80x48 but frame 0 is 64x64: all frames .* same size"):
+        segment_moving_bodies(str(tmp_path), n_nodes=100)
+    assert segment_moving_bodies(str(tmp_path), frames=2, n_nodes=100)["frame_indices"] == [0, 1]
+
+
 def test_openai_schema_matches_the_functions():
     tools = {t["function"]["name"]: t["function"] for t in openai_tools()}
     for fn in (segment_moving_bodies, ask_about_motion):
@@ -102,14 +131,18 @@ def test_openai_schema_matches_the_functions():
         schema = tools[fn.__name__]["parameters"]
         assert set(schema["properties"]) == set(params) - {"vlm"}  # the VLM is the server's choice
         assert set(schema["required"]) == {n for n, p in params.items() if p.default is p.empty}
+        assert schema["properties"]["n_nodes"]["maximum"] == MAX_NODES
         for name, prop in schema["properties"].items():
             if "default" in prop:
                 assert prop["default"] == params[name].default, name
 
 
 def test_vlm_choice_errors(tmp_path, clip):
-    with pytest.raises(VLMError, match="cannot read VLM spec"):
+    with pytest.raises(VLMError, match="could not load the VLM 'nonsense': cannot read VLM spec"):
         make_vlm("nonsense")
+    with pytest.raises(VLMError, match="a VLM spec is a string"):
+        make_vlm(5)
+    assert make_vlm("  ").name == make_vlm(" STUB ").name == "stub"
     with pytest.raises(VLMError, match="not a transformers model folder"):
         make_vlm(str(tmp_path))
     with pytest.raises(VLMError, match="could not load"):
@@ -120,6 +153,25 @@ def test_vlm_choice_errors(tmp_path, clip):
         answer_question(seg, "What moved?", down)
     scripted = answer_question(seg, "What moved?", "stub:Nothing, really.")
     assert scripted.answer == "Nothing, really." and scripted.cited_ids == []
+    for fails, words in [(None, "it returned NoneType, not text"), ({"answer": "[1]"}, "returned dict"),
+                         (ValueError("height:16 must be larger than factor:28"), "larger than factor"),
+                         (KeyError("choices"), "'choices'")]:
+        with pytest.raises(VLMError, match=f"the VLM did not answer: .*{words}"):
+            answer_question(seg, "What moved?", _Scripted(fails))
+    with pytest.raises(TypeError, match="vlm must be a VLM spec or have generate"):
+        answer_question(seg, "What moved?", 5)
+
+
+class _Scripted:
+    """A VLM that returns, or raises, what it is given."""
+
+    def __init__(self, out):
+        self.out = out
+
+    def generate(self, frames, prompt, system=None, **gen):
+        if isinstance(self.out, Exception):
+            raise self.out
+        return self.out
 
 
 def test_window_memory_limit(clip, monkeypatch):
@@ -130,3 +182,21 @@ def test_window_memory_limit(clip, monkeypatch):
         segment_moving_bodies(clip, frames=5, n_nodes=100)
     with pytest.raises(ValueError, match="more than 3 frames of 320x240"):
         segment_moving_bodies(clip, n_nodes=100)
+
+
+def test_window_errors_come_before_segmenting(clip, monkeypatch):
+    import demos.segmentation
+
+    class Refuses:
+        def __init__(self, config):
+            pass
+
+        def update(self, frame):
+            pytest.fail("segmented before the window was checked")
+
+    monkeypatch.setattr(demos.segmentation, "MotionBitsSegmenter", Refuses)
+    monkeypatch.setattr(demos.segmentation, "MAX_WINDOW_PIXELS", 3 * SIZE[0] * SIZE[1])
+    with pytest.raises(ValueError, match="more than 3 frames of 320x240"):
+        segment_moving_bodies(clip, n_nodes=100)
+    with pytest.raises(ValueError, match="found 1 from frame 7"):
+        segment_moving_bodies(clip, start=7, n_nodes=100)

@@ -107,6 +107,10 @@ def test_stub_vlm_scripts_and_records():
     assert [(c.num_frames, c.frame_size, c.prompt, c.system) for c in vlm.calls[:2]] == [
         (3, (6, 8), "q1", None), (1, (6, 8), "q2", "s")]
     assert StubVLM(lambda fr, p: f"{len(fr)}:{p}").generate_batch([frames, frames[:2]], "q") == ["3:q", "2:q"]
+    with pytest.raises(TypeError, match="script returned NoneType, not str"):  # not the answer "None"
+        StubVLM(lambda fr, p: None).generate(frames, "q")
+    with pytest.raises(TypeError, match="responses must be strings, got NoneType"):
+        StubVLM(["fine", None])
     once = StubVLM(["only"], cycle=False)
     once.generate(frames, "q")
     with pytest.raises(IndexError):
@@ -176,6 +180,9 @@ def test_masks_to_label_map_order_and_overlap():
     assert set(np.unique(masks_to_label_map(hidden, [0.9, 0.1]))) == {0, 1}
     assert masks_to_label_map(masks, [0.5, 0.9, 0.7], max_instances=1).max() == 1
     assert masks_to_label_map(np.zeros((0, 4, 5), bool)).shape == (4, 5)
+    for scores in ([0.9], [0.5, 0.9, 0.7, 0.1], [[0.5, 0.9, 0.7]]):  # not one score per mask
+        with pytest.raises(ValueError, match="3 masks but scores of shape"):
+            masks_to_label_map(masks, scores)
 
 
 class _BoxDetector:
@@ -206,6 +213,13 @@ def test_text_grounder_with_stub_detector_places_labels_exactly():
     np.testing.assert_array_equal(labels, expected)
     assert grounder.ground("- none: nothing moved", image).max() == 0
     assert det.seen[-1] == ["red block", "drawer", "ghost"]  # no detector call for an empty list
+    # a detector's wrong result is an error, not a label map of another size
+    grounder.detector.detect = lambda image, phrases: Detections(np.ones((1, 48, 64), bool), [0.9], ["x"])
+    with pytest.raises(ValueError, match="returned masks of 64x48 for an image of 32x24"):
+        grounder.ground("- red block: cube", image)
+    grounder.detector.detect = lambda image, phrases: None
+    with pytest.raises(TypeError, match="_BoxDetector.detect must return Detections, got NoneType"):
+        grounder.ground("- red block: cube", image)
 
 
 def test_vlm_yoloe_method_end_to_end_with_stubs():

@@ -125,3 +125,56 @@ def test_unreachable_server_is_a_connection_error():
     vlm = OpenAICompatibleVLM(f"http://127.0.0.1:{port}/v1", model="m", timeout=5)
     with pytest.raises(ConnectionError, match="is the server running"):
         vlm.generate(_frames(1), "Q")
+
+
+@pytest.fixture()
+def canned():
+    """A server answering every request with the raw bytes ``canned.reply`` (a short body
+    for ``canned.length`` > its size: the connection ends mid-body)."""
+
+    class Handler(BaseHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+        def do_POST(self):
+            self.rfile.read(int(self.headers["Content-Length"]))
+            self.send_response(200)
+            self.send_header("Content-Length", str(Handler.length or len(Handler.reply)))
+            self.end_headers()
+            self.wfile.write(Handler.reply)
+
+    Handler.reply, Handler.length = b"", None
+    httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=httpd.serve_forever, daemon=True).start()
+    Handler.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
+    yield Handler
+    httpd.shutdown()
+    httpd.server_close()
+
+
+def _reply(content) -> bytes:
+    return json.dumps({"choices": [{"message": {"content": content}}]}).encode()
+
+
+@pytest.mark.parametrize("reply, length, words", [
+    (b"", None, "did not answer JSON"),
+    (b"<html>Bad gateway</html>", None, "did not answer JSON"),
+    (b"\xff\xfe not utf-8", None, "did not answer JSON"),
+    (b'{"choi', 100, "broken HTTP response"),
+    (_reply(123), None, "content is not text"),
+    (_reply(0), None, "content is not text"),
+    (_reply({"text": "hi"}), None, "content is not text"),
+    (_reply([{"type": "text", "text": None}]), None, "content is not text"),
+])
+def test_garbage_replies_are_runtime_errors(canned, reply, length, words):
+    canned.reply, canned.length = reply, length
+    with pytest.raises(RuntimeError, match=words):
+        OpenAICompatibleVLM(canned.url, model="m", timeout=5).generate(_frames(1), "Q")
+
+
+def test_content_parts_and_null_content(canned):
+    vlm = OpenAICompatibleVLM(canned.url, model="m", timeout=5)
+    canned.reply = _reply([{"type": "text", "text": "the cup "}, "[1]", {"type": "image_url"}])
+    assert vlm.generate(_frames(1), "Q") == "the cup [1]"
+    canned.reply = _reply(None)
+    assert vlm.generate(_frames(1), "Q") == ""

@@ -115,6 +115,8 @@ def masks_to_label_map(
     if masks.ndim != 3:
         raise ValueError(f"masks must be (K, H, W), got shape {masks.shape}")
     k, h, w = masks.shape
+    if scores is not None and np.shape(scores) != (k,):
+        raise ValueError(f"{k} masks but scores of shape {np.shape(scores)}; give one score per mask")
     labels = np.zeros((h, w), np.int32)
     order = np.arange(k) if scores is None else np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
     next_label = 1
@@ -353,7 +355,14 @@ class TextGrounder:
         phrases = self.phrases(text)
         if not phrases:
             return Detections.empty(*rgb.shape[:2])
-        return self.detector.detect(rgb, phrases)
+        det = self.detector.detect(rgb, phrases)
+        name = type(self.detector).__name__
+        if not isinstance(det, Detections):
+            raise TypeError(f"{name}.detect must return Detections, got {type(det).__name__}")
+        if det.masks.shape[1:] != rgb.shape[:2]:
+            raise ValueError(f"{name}.detect returned masks of {det.masks.shape[2]}x{det.masks.shape[1]} for an "
+                             f"image of {rgb.shape[1]}x{rgb.shape[0]}; masks must have the image's size")
+        return det
 
     def ground(self, text: str, image: Frame) -> np.ndarray:
         """(H, W) int32 label map of the objects named in `text` (0 = background, 1..K)."""

@@ -10,6 +10,7 @@ followed by the prompt text. Standard library only (urllib): no extra to install
 from __future__ import annotations
 
 import base64
+import http.client
 import io
 import json
 import os
@@ -137,7 +138,7 @@ class OpenAICompatibleVLM(BaseVLM):
         req = urllib.request.Request(self.endpoint, data=data, headers=headers, method="POST")
         try:
             with urllib.request.urlopen(req, timeout=self.timeout) as resp:
-                return json.loads(resp.read().decode("utf-8"))
+                raw = resp.read()
         except urllib.error.HTTPError as exc:
             detail = exc.read().decode("utf-8", "replace")[:2000]
             raise RuntimeError(f"{self.endpoint} answered HTTP {exc.code}: {detail}") from exc
@@ -146,6 +147,13 @@ class OpenAICompatibleVLM(BaseVLM):
                 f"could not reach {self.endpoint} ({exc.reason}); is the server running "
                 f"(e.g. `vllm serve {self.model}`)?"
             ) from exc
+        except http.client.HTTPException as exc:  # a status line or body that is not HTTP
+            raise RuntimeError(f"{self.endpoint} sent a broken HTTP response ({type(exc).__name__}: "
+                               f"{str(exc).strip()[:200]}); is it a chat-completions server?") from exc
+        try:
+            return json.loads(raw.decode("utf-8"))
+        except ValueError as exc:  # not UTF-8, or not JSON
+            raise RuntimeError(f"{self.endpoint} did not answer JSON: {raw[:500]!r}") from exc
 
     def generate(
         self,
@@ -158,7 +166,12 @@ class OpenAICompatibleVLM(BaseVLM):
         temperature: float = 1.0,
         seed: int | None = None,
     ) -> str:
-        """Send frames + prompt, return the first choice's message content."""
+        """Send frames + prompt, return the first choice's message content ("" if it has none).
+
+        Raises:
+            ConnectionError: the server cannot be reached.
+            RuntimeError: an HTTP error, or a reply that is not a chat completion with text.
+        """
         body = self.build_request(
             frames, prompt, system, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature, seed=seed
         )
@@ -168,8 +181,15 @@ class OpenAICompatibleVLM(BaseVLM):
         except (KeyError, IndexError, TypeError) as exc:
             raise RuntimeError(f"unexpected reply from {self.endpoint}: {str(reply)[:500]}") from exc
         if isinstance(content, list):  # some servers return content parts
-            content = "".join(p.get("text", "") for p in content if isinstance(p, dict))
-        return (content or "").strip()
+            parts = [p.get("text", "") if isinstance(p, dict) else p for p in content]
+            if all(isinstance(p, str) for p in parts):
+                content = "".join(parts)
+        if content is None:  # a message without text
+            return ""
+        if not isinstance(content, str):
+            raise RuntimeError(f"unexpected reply from {self.endpoint}: the message content is not text: "
+                               f"{str(reply)[:500]}")
+        return content.strip()
 
     def generate_batch(
         self,

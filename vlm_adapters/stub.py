@@ -60,9 +60,12 @@ class StubVLM(BaseVLM):
         elif isinstance(responses, str):
             self._answers = [responses]
         else:
-            self._answers = [str(r) for r in responses]
+            self._answers = list(responses)
             if not self._answers:
                 raise ValueError("StubVLM needs at least one scripted response")
+            bad = [r for r in self._answers if not isinstance(r, str)]
+            if bad:
+                raise TypeError(f"StubVLM responses must be strings, got {type(bad[0]).__name__} {bad[0]!r:.40}")
         self.cycle = cycle
         self.name = name
         self.calls: list[StubCall] = []
@@ -83,7 +86,10 @@ class StubVLM(BaseVLM):
         gen = {"max_new_tokens": max_new_tokens, "do_sample": do_sample, "temperature": temperature, "seed": seed}
         self.calls.append(StubCall(len(arrays), arrays[-1].shape[:2], prompt, system, arrays, gen))
         if self._fn is not None:
-            return str(self._fn(arrays, prompt))
+            answer = self._fn(arrays, prompt)
+            if not isinstance(answer, str):  # str(None) would be the answer "None"
+                raise TypeError(f"the StubVLM script returned {type(answer).__name__}, not str")
+            return answer
         if i >= len(self._answers) and not self.cycle:
             raise IndexError(f"StubVLM ran out of scripted responses after {len(self._answers)} calls")
         return self._answers[i % len(self._answers)]
