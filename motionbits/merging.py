@@ -10,14 +10,14 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   each about as well as its own motion does (photometric residual, grey levels);
 - they *disagree* when that union motion explains one of them clearly worse at two
   frames (or by twice as much at one: a single frame's flow can be wrong on a thin or
-  textureless part), or when one
-  was born out of pixels seen standing still while the other was moving (background
-  counts as a label in the paper: a point that moved and one that did not are never one
-  rigid body -- this keeps a pushed block apart from the gripper that pushes it);
+  textureless part), or when one was born out of pixels seen standing still while the
+  other was moving (background counts as a label in the paper: a point that moved and
+  one that did not are never one rigid body -- this keeps a pushed block apart from the
+  gripper that pushes it);
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final; a group that loses a member splits again.
 
-State is one small set of id pairs per relation; nothing grows with the video's length
+State is one small set of id pairs per relation (and a count of frames beyond the margin); nothing grows with the video's length
 except the number of ids.
 """
 
