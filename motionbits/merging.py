@@ -17,8 +17,8 @@ pieces apart for good. This module joins them again at the level of MotionBit id
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final; a group that loses a member splits again.
 
-State is one small set of id pairs per relation (and a count of frames beyond the margin); nothing grows with the video's length
-except the number of ids.
+State is one small set of id pairs per relation (and a count of frames beyond the margin
+per pair); nothing grows with the video's length except the number of ids.
 """
 
 from __future__ import annotations
