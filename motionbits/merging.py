@@ -220,10 +220,10 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     are different bodies for good (the pushed block is not the gripper that pushes it; a
     part of the gripper that the masks missed while it moved is). Stillness seen before
     the older MotionBit moved tells nothing about the two: an arm's upper part, slow
-    near the shoulder, reads as standing still while the whole arm starts moving. Otherwise, where either has a motion this frame, one affine motion is fitted to
-    the nodes of both and :func:`union_excess` is observed -- a member without
-    motion stands still (``STILL``), which can show that they differ, never that they
-    agree.
+    near the shoulder, reads as standing still while the whole arm starts moving.
+    Otherwise, where either has a motion this frame, one affine motion is fitted to the
+    nodes of both and :func:`union_excess` is observed -- a member without motion stands
+    still (``STILL``), which can show that they differ, never that they agree.
 
     Args:
         groups: the relations, updated in place.
