@@ -67,6 +67,20 @@ def _call(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
         "function": {"name": name, "arguments": json.dumps(arguments)}}]}
 
 
+def _arguments(text: Any) -> dict[str, Any] | str:
+    """A tool call's arguments as the LLM wrote them (a JSON object; empty = none), or the
+    error message to send back to it as the tool's result."""
+    if text is None or (isinstance(text, str) and not text.strip()):
+        return {}
+    try:
+        arguments = json.loads(text)
+    except (TypeError, ValueError) as e:
+        return f"the tool call's arguments are not valid JSON ({e}): {str(text)[:200]!r}"
+    if not isinstance(arguments, dict):
+        return f"the tool call's arguments must be a JSON object, got {type(arguments).__name__}"
+    return arguments
+
+
 def server_command() -> list[str]:
     """``motionbits-mcp`` if installed next to this Python, else ``python -m demos.mcp_server``."""
     script = shutil.which("motionbits-mcp", path=os.path.dirname(sys.executable))
@@ -103,11 +117,15 @@ async def run_agent(llm: Any, task: str = TASK, *, server: list[str] | None = No
                 return messages
             for call in reply["tool_calls"]:
                 fn = call["function"]
-                result = await session.call_tool(fn["name"], json.loads(fn["arguments"]))
-                if result.is_error:
-                    content = json.dumps({"error": " ".join(c.text for c in result.content if hasattr(c, "text"))})
+                arguments = _arguments(fn.get("arguments"))
+                if isinstance(arguments, str):  # what the LLM wrote is not a JSON object
+                    content = json.dumps({"error": arguments})
                 else:
-                    content = json.dumps(result.structured_content)
+                    result = await session.call_tool(fn["name"], arguments)
+                    if result.is_error:
+                        content = json.dumps({"error": " ".join(c.text for c in result.content if hasattr(c, "text"))})
+                    else:
+                        content = json.dumps(result.structured_content)
                 messages.append({"role": "tool", "tool_call_id": call["id"], "content": content})
     raise RuntimeError(f"the agent did not finish in {max_turns} turns")
 

@@ -38,3 +38,21 @@ def test_scripted_llm_reports_a_tool_error():
     error = {"role": "tool", "tool_call_id": "x", "content": json.dumps({"error": "video not found: missing.mp4"})}
     last = llm([{"role": "user", "content": "go"}, first, error], tools)
     assert last == {"role": "assistant", "content": "The tool failed: video not found: missing.mp4"}
+
+
+class _SloppyLLM:
+    """Writes broken JSON as its first tool call's arguments, then reports what came back."""
+
+    def __call__(self, messages, tools):
+        tool = [m for m in messages if m["role"] == "tool"]
+        if not tool:
+            return {"role": "assistant", "content": None, "tool_calls": [{
+                "id": "call_1", "type": "function",
+                "function": {"name": "segment_moving_bodies", "arguments": '{"video": "clip.mp4",'}}]}
+        return {"role": "assistant", "content": tool[-1]["content"]}
+
+
+def test_malformed_tool_arguments_go_back_to_the_llm_as_an_error():
+    messages = anyio.run(run_agent, _SloppyLLM())
+    result = json.loads(messages[-1]["content"])
+    assert "not valid JSON" in result["error"]  # the loop went on; the LLM saw the error
