@@ -21,7 +21,7 @@ from motionbits import MotionBitsConfig
 from .schema import ASK_ABOUT_MOTION, SEGMENT_MOVING_BODIES
 from .segmentation import MAX_NODES
 from .tool import ask_about_motion, segment_moving_bodies
-from .vlm import VLMError, make_vlm, vlm_spec_help
+from .vlm import VLMError, check_vlm_spec, make_vlm, vlm_spec_help
 
 __all__ = ["build_server", "main"]
 
@@ -43,17 +43,19 @@ _USER_ERRORS = (FileNotFoundError, ValueError, TypeError, VLMError)
 def build_server(vlm: str = "stub") -> Any:
     """An ``mcp.server.mcpserver.MCPServer`` with both tools; ``vlm`` answers questions.
 
-    ``vlm``: a spec of :func:`demos.vlm.make_vlm`, checked now; a model or endpoint is
-    built on the first question (``"stub"``: a new stub per question that cites the
-    largest MotionBit).
+    ``vlm``: a spec of :func:`demos.vlm.make_vlm`, checked now without loading anything
+    (:func:`demos.vlm.check_vlm_spec`: a malformed spec or a missing model folder raises
+    :class:`demos.vlm.VLMError`); a model or endpoint is built on the first question
+    (``"stub"``: a new stub per question that cites the largest MotionBit).
     """
+    check_vlm_spec(vlm)
     from mcp.server.mcpserver import MCPServer
     from mcp.server.mcpserver.exceptions import ToolError
 
     state: dict[str, Any] = {}
 
     def the_vlm() -> Any:
-        if vlm.strip() == "stub":
+        if vlm.strip().lower() == "stub":
             return None  # ask_about_motion builds the default stub for each video
         if "vlm" not in state:
             state["vlm"] = make_vlm(vlm)
@@ -91,7 +93,11 @@ def main(argv: list[str] | None = None) -> int:
         description="Serve segment_moving_bodies and ask_about_motion over MCP (stdio).")
     parser.add_argument("--vlm", default="stub", help=f"VLM for ask_about_motion: {vlm_spec_help()}")
     args = parser.parse_args(argv)
-    build_server(args.vlm).run("stdio")
+    try:
+        server = build_server(args.vlm)
+    except VLMError as exc:  # before serving: the client sees the server exit with the reason
+        parser.error(str(exc))
+    server.run("stdio")
     return 0
 
 

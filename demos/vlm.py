@@ -11,7 +11,7 @@ import numpy as np
 
 from somprompt import MarkRegistry
 
-__all__ = ["VLMError", "make_vlm", "stub_answer", "vlm_spec_help"]
+__all__ = ["VLMError", "check_vlm_spec", "make_vlm", "stub_answer", "vlm_spec_help"]
 
 #: transformers ``model_type`` (config.json) -> ``vlm_adapters.load_vlm`` kind
 _MODEL_TYPES = {"qwen2_5_vl": "qwen2.5-vl", "internvl": "internvl", "video_llama_3": "videollama3"}
@@ -74,16 +74,11 @@ def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float
             failed (the message says why in one line).
     """
     from vlm_adapters import OpenAICompatibleVLM, StubVLM
-    from vlm_adapters.plugin import METHOD_NAME, load_vlm, parse_vlm_spec
+    from vlm_adapters.plugin import load_vlm, parse_vlm_spec
 
-    if spec is not None and not isinstance(spec, str):
-        raise VLMError(f"a VLM spec is a string ({vlm_spec_help()}), got {type(spec).__name__} {spec!r:.40}")
-    spec = (spec or "").strip() or "stub"
+    spec = _resolve(spec)
     if spec.lower() == "stub":
         return StubVLM(stub_text or "Stub VLM (scripted, it does not look at the video).")
-    expanded = os.path.expanduser(spec)
-    if os.path.isdir(expanded):
-        spec = f"{_kind_of_folder(Path(expanded))}:{expanded}"
     try:
         kind, arg = parse_vlm_spec(spec)
         if kind == "openai":
@@ -93,6 +88,41 @@ def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float
             return OpenAICompatibleVLM(url, model, timeout=timeout)
         return load_vlm(spec)
     except Exception as exc:  # any loader failure becomes one readable line
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        msg = msg.removeprefix(f"{METHOD_NAME} option 'vlm': ")  # the benchmark's wording, not ours
-        raise VLMError(f"could not load the VLM {spec!r}: {msg}") from exc
+        raise _load_error(spec, exc) from exc
+
+
+def check_vlm_spec(spec: str) -> None:
+    """Check a spec of :func:`make_vlm` without loading anything: its form, that the model
+    folder or checkpoint exists, that an endpoint's URL is well formed.
+
+    Raises:
+        VLMError: what is wrong, in one line.
+    """
+    from vlm_adapters.plugin import check_vlm_files, parse_vlm_spec
+
+    spec = _resolve(spec)
+    if spec.lower() == "stub":
+        return
+    try:
+        check_vlm_files(*parse_vlm_spec(spec))
+    except Exception as exc:
+        raise _load_error(spec, exc) from exc
+
+
+def _resolve(spec: str | None) -> str:
+    """The spec stripped ("" -> "stub"), a model folder as ``KIND:FOLDER``."""
+    if spec is not None and not isinstance(spec, str):
+        raise VLMError(f"a VLM spec is a string ({vlm_spec_help()}), got {type(spec).__name__} {spec!r:.40}")
+    spec = (spec or "").strip() or "stub"
+    expanded = os.path.expanduser(spec)
+    if spec.lower() != "stub" and os.path.isdir(expanded):
+        spec = f"{_kind_of_folder(Path(expanded))}:{expanded}"
+    return spec
+
+
+def _load_error(spec: str, exc: Exception) -> VLMError:
+    from vlm_adapters.plugin import METHOD_NAME
+
+    msg = " ".join(str(exc).split()) or type(exc).__name__
+    msg = msg.removeprefix(f"{METHOD_NAME} option 'vlm': ")  # the benchmark's wording, not ours
+    return VLMError(f"could not load the VLM {spec!r}: {msg}")

@@ -107,3 +107,12 @@ def test_mcp_server_initialize_list_call(clip, tmp_path):
     largest = bodies[0]
     assert f"[{largest['mark']}]" in ask["answer"]
     assert [c["id"] for c in ask["cited"]] == [largest["id"]]
+
+
+def test_mcp_server_refuses_a_bad_vlm_spec_at_start(capsys):
+    from demos.mcp_server import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--vlm", "nonsense"])
+    assert exit_info.value.code == 2
+    assert "could not load the VLM 'nonsense': cannot read VLM spec" in capsys.readouterr().err

@@ -15,6 +15,7 @@ pytest.importorskip("pycocotools")
 from pycocotools import mask as coco_mask  # noqa: E402
 
 from demos import VLMError, ask_about_motion, make_vlm, openai_tools, segment_moving_bodies  # noqa: E402
+from demos.vlm import check_vlm_spec  # noqa: E402
 from demos.media import write_demo_clip  # noqa: E402
 from demos.segmentation import MAX_NODES, segment_window  # noqa: E402
 from demos.tool import answer_question  # noqa: E402
@@ -135,6 +136,17 @@ def test_openai_schema_matches_the_functions():
         for name, prop in schema["properties"].items():
             if "default" in prop:
                 assert prop["default"] == params[name].default, name
+
+
+def test_check_vlm_spec_loads_nothing(tmp_path):
+    for ok in ["stub", " STUB ", "", "stub:some text", "openai:http://localhost:8000/v1@m"]:
+        check_vlm_spec(ok)  # no error, nothing loaded, nothing contacted
+    for bad, words in [("nonsense", "cannot read VLM spec"), (5, "a VLM spec is a string"),
+                       (str(tmp_path), "not a transformers model folder"),
+                       ("qwen2.5-vl:" + str(tmp_path / "no-such-model"), "could not load"),
+                       ("openai:localhost@m", "must start with http")]:
+        with pytest.raises(VLMError, match=words):
+            check_vlm_spec(bad)
 
 
 def test_vlm_choice_errors(tmp_path, clip):

@@ -38,7 +38,7 @@ from .base import VLMAdapter, check_local_path, require
 from .method import VLMYOLOEMethod
 from .phrases import MOVED_OBJECTS_PROMPT, phrases_from_answer
 
-__all__ = ["VLM_KINDS", "parse_vlm_spec", "load_vlm", "load_embeddings", "vlm_yoloe_method"]
+__all__ = ["VLM_KINDS", "parse_vlm_spec", "check_vlm_files", "load_vlm", "load_embeddings", "vlm_yoloe_method"]
 
 METHOD_NAME = "vlm-yoloe"
 
@@ -76,7 +76,7 @@ def parse_vlm_spec(spec: str) -> tuple[str, str]:
     return kind, arg if kind == "stub" else arg.strip()
 
 
-def _check_vlm_files(kind: str, arg: str) -> None:
+def check_vlm_files(kind: str, arg: str) -> None:
     """Cheap checks before anything is loaded (missing checkpoint folder, malformed URL)."""
     if VLM_KINDS[kind][1] == "PATH":
         check_local_path(arg, what=f"{_opt('vlm')}: {VLM_KINDS[kind][0]} checkpoint")
@@ -106,7 +106,7 @@ def load_vlm(
     import vlm_adapters
 
     kind, arg = parse_vlm_spec(spec)
-    _check_vlm_files(kind, arg)
+    check_vlm_files(kind, arg)
     cls = getattr(vlm_adapters, VLM_KINDS[kind][0])
     if kind == "stub":
         return cls(arg.replace("\\n", "\n"))
@@ -259,7 +259,7 @@ def vlm_yoloe_method(
     vocab = load_embeddings(os.path.expanduser(os.fspath(embeddings))) if embeddings is not None else None
     if isinstance(vlm, str):
         kind, arg = parse_vlm_spec(vlm)
-        _check_vlm_files(kind, arg)
+        check_vlm_files(kind, arg)
         if kind == "internvideo2.5" and not trust:
             raise ValueError(f"{_opt('vlm')}: internvideo2.5 checkpoints run their own Python code; read it, "
                              f"then add --option {METHOD_NAME}.trust_remote_code=true")
