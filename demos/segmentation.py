@@ -12,10 +12,11 @@ from typing import Callable
 import numpy as np
 
 from motionbits import MotionBitsConfig, MotionBitsSegmenter, iter_frames
+from motionbits.segmenter import MIN_WORK_SIDE, min_short_side, work_size
 from somprompt import MarkRegistry
 
-__all__ = ["MAX_NODES", "MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_window", "max_frames_for",
-           "segment_window"]
+__all__ = ["MAX_NODES", "MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_frame_shape",
+           "check_window", "max_frames_for", "segment_window"]
 
 #: Most frames one call processes (frames and label maps are kept in memory and returned) ...
 MAX_WINDOW_FRAMES = 300
@@ -100,6 +101,24 @@ def check_window(start: object = 0, frames: object = None, every: object = 1,
     return s, f, e, n
 
 
+def check_frame_shape(height: int, width: int, config: MotionBitsConfig) -> None:
+    """Refuse frames too thin for the segmenter, saying how large the video must be.
+
+    The segmenter's own error (``crop it or raise max_side``) speaks to library users;
+    here the user can only change the video, so the message gives its smallest size.
+
+    Raises:
+        ValueError: the shorter side is below ``min_short_side`` for the longer one.
+    """
+    if min(work_size(height, width, config.max_side)) >= MIN_WORK_SIDE:
+        return
+    long_side = max(height, width)
+    need = min_short_side(long_side, config.max_side)
+    raise ValueError(f"the video's frames are {width}x{height}, too thin to segment: with a longer "
+                     f"side of {long_side} px the shorter side must be at least {need} px; "
+                     "crop the video to a less elongated region")
+
+
 def _check_video(video: object) -> Path:
     if not isinstance(video, (str, os.PathLike)) or not str(video).strip():
         raise ValueError(f"video must be the path of a video file or image folder, got {video!r}")
@@ -129,8 +148,9 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
 
     Raises:
         FileNotFoundError: no such file or folder.
-        ValueError: a bad argument, an unreadable video, fewer than two frames in the
-            window, or more than ``max_frames_for(H, W)``.
+        ValueError: a bad argument, an unreadable video, frames too thin to segment
+            (:func:`check_frame_shape`), fewer than two frames in the window, or more
+            than ``max_frames_for(H, W)``.
     """
     start, frames, every, n_nodes = check_window(start, frames, every, n_nodes)
     path = _check_video(video)
@@ -144,6 +164,7 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
         if i < start or (i - start) % every:
             continue
         if not window:
+            check_frame_shape(*frame.shape[:2], cfg)
             cap = max_frames_for(*frame.shape[:2])
             if frames is not None and frames > cap:
                 raise ValueError(f"frames={frames} is too many at {frame.shape[1]}x{frame.shape[0]}: "

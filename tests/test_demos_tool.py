@@ -115,6 +115,43 @@ def test_bad_videos(tmp_path):
         ask_about_motion(str(one), "  ")
 
 
+def test_thin_video_says_its_smallest_size(tmp_path, monkeypatch):
+    """The segmenter's 'crop it or raise max_side' is for library users: a tool user can
+    only change the video, so the message gives the size it needs, before segmenting."""
+    import demos.segmentation
+    from PIL import Image
+
+    class Refuses:
+        def __init__(self, *a, **k):
+            pass
+
+        def update(self, frame):
+            pytest.fail("segmented a frame that is too thin")
+
+    monkeypatch.setattr(demos.segmentation, "MotionBitsSegmenter", Refuses)
+    for i in range(2):
+        Image.fromarray(np.full((8, 4000, 3), 60 * i, np.uint8)).save(tmp_path / f"{i}.png")
+    with pytest.raises(ValueError) as err:
+        segment_moving_bodies(str(tmp_path), n_nodes=100)
+    assert str(err.value) == ("the video's frames are 4000x8, too thin to segment: with a longer side of "
+                              "4000 px the shorter side must be at least 122 px; crop the video to a less "
+                              "elongated region")
+
+
+def test_min_short_side_is_the_segmenters_limit():
+    """``min_short_side`` (the size the demos' message names) is exactly where the
+    segmenter starts accepting frames."""
+    from motionbits import MotionBitsConfig, MotionBitsSegmenter
+    from motionbits.segmenter import min_short_side
+
+    for long_side, max_side in [(4000, 640), (1000, 640), (300, 640), (900, 160)]:
+        need = min_short_side(long_side, max_side)
+        config = MotionBitsConfig(n_nodes=100, max_side=max_side)
+        with pytest.raises(ValueError, match="raise max_side"):  # the core's message, unchanged
+            MotionBitsSegmenter(config).update(np.zeros((need - 1, long_side, 3), np.uint8))
+        MotionBitsSegmenter(config).update(np.zeros((need, long_side, 3), np.uint8))
+
+
 def test_folder_of_mixed_sizes(tmp_path):
     from PIL import Image
 
