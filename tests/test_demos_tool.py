@@ -186,6 +186,31 @@ def test_check_vlm_spec_loads_nothing(tmp_path):
             check_vlm_spec(bad)
 
 
+def test_internvideo25_loads_the_remote_code_of_a_local_folder(tmp_path, monkeypatch):
+    """``internvideo2.5:FOLDER`` is offered by the demos, and that checkpoint exists only as
+    remote code: naming the kind with a local folder is the opt-in, so it loads with
+    ``trust_remote_code=True``; a hub id (code downloaded and run unread) is refused, at
+    start too. Other kinds never get ``trust_remote_code``."""
+    from vlm_adapters import InternVideo25Adapter, Qwen2_5_VLAdapter
+
+    calls = []
+
+    def record(cls, path, **kw):
+        calls.append((cls.__name__, path, kw.get("trust_remote_code", False)))
+        return "loaded"
+
+    for cls in (InternVideo25Adapter, Qwen2_5_VLAdapter):
+        monkeypatch.setattr(cls, "from_pretrained", classmethod(record))
+    assert make_vlm(f"internvideo2.5:{tmp_path}") == "loaded"
+    check_vlm_spec(f"internvideo2.5:{tmp_path}")
+    assert make_vlm(f"qwen2.5-vl:{tmp_path}") == "loaded"
+    assert calls == [("InternVideo25Adapter", str(tmp_path), True), ("Qwen2_5_VLAdapter", str(tmp_path), False)]
+    for check in (make_vlm, check_vlm_spec):
+        with pytest.raises(VLMError, match="run their own Python code, so give the local folder"):
+            check("internvideo2.5:OpenGVLab/InternVideo2_5_Chat_8B")
+    assert len(calls) == 2
+
+
 def test_vlm_choice_errors(tmp_path, clip):
     with pytest.raises(VLMError, match="could not load the VLM 'nonsense': cannot read VLM spec"):
         make_vlm("nonsense")
