@@ -130,12 +130,44 @@ def test_thin_video_says_its_smallest_size(tmp_path, monkeypatch):
 
     monkeypatch.setattr(demos.segmentation, "MotionBitsSegmenter", Refuses)
     for i in range(2):
-        Image.fromarray(np.full((8, 4000, 3), 60 * i, np.uint8)).save(tmp_path / f"{i}.png")
+        Image.fromarray(np.full((8, 1000, 3), 60 * i, np.uint8)).save(tmp_path / f"{i}.png")
     with pytest.raises(ValueError) as err:
         segment_moving_bodies(str(tmp_path), n_nodes=100)
-    assert str(err.value) == ("the video's frames are 4000x8, too thin to segment: with a longer side of "
-                              "4000 px the shorter side must be at least 122 px; crop the video to a less "
+    assert str(err.value) == ("the video's frames are 1000x8, too thin to segment: with a longer side of "
+                              "1000 px the shorter side must be at least 31 px; crop the video to a less "
                               "elongated region")
+
+
+def test_large_frames_are_refused_before_decoding(tmp_path, monkeypatch):
+    """Frames over MAX_VIDEO_SIDE are refused from a video file's header, before any frame
+    is decoded, and in a folder of images once the first one is (whatever ``start``); not
+    after decoding the window at full size."""
+    import demos.segmentation
+    from PIL import Image
+
+    decoded = []
+
+    def counting(path):
+        for frame in iter_frames(path):
+            decoded.append(frame.shape)
+            yield frame
+
+    from motionbits import iter_frames
+    monkeypatch.setattr(demos.segmentation, "iter_frames", counting)
+    for i in range(4):
+        Image.fromarray(np.full((100, 2000, 3), 60 * i, np.uint8)).save(tmp_path / f"{i}.png")
+    for start in (0, 2):
+        decoded.clear()
+        with pytest.raises(ValueError) as err:
+            segment_moving_bodies(str(tmp_path), start=start, frames=2, n_nodes=100)
+        assert str(err.value).startswith("the video's frames are 2000x100, over the limit of 1920 px on the "
+                                         "longer side (the segmenter works at 640 px anyway); downscale it")
+        assert decoded == [(100, 2000, 3)]
+    wide = write_h264([np.full((100, 2000, 3), 60 * i, np.uint8) for i in range(2)], tmp_path / "wide.mp4")
+    decoded.clear()
+    with pytest.raises(ValueError, match="frames are 2000x100, over the limit of 1920 px"):
+        ask_about_motion(str(wide), "What moved?", n_nodes=100)
+    assert decoded == []
 
 
 def test_min_short_side_is_the_segmenters_limit():
