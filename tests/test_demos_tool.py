@@ -243,6 +243,15 @@ def test_internvideo25_loads_the_remote_code_of_a_local_folder(tmp_path, monkeyp
     assert len(calls) == 2
 
 
+def test_an_answer_with_a_lone_surrogate_is_returned_encodable(clip):
+    """What the tool returns is written as UTF-8 JSON (the MCP server does): a lone
+    surrogate in the VLM's text is replaced, not passed on to crash there."""
+    seg = segment_window(clip, frames=3, n_nodes=100)
+    ans = answer_question(seg, "What moved?", "stub:It is [1] \ud800.")
+    assert ans.answer == "It is [1] \ufffd."
+    json.dumps({"answer": ans.answer}, ensure_ascii=False).encode("utf-8")
+
+
 def test_vlm_choice_errors(tmp_path, clip):
     with pytest.raises(VLMError, match="could not load the VLM 'nonsense': cannot read VLM spec"):
         make_vlm("nonsense")
