@@ -29,7 +29,7 @@ from motionbits.video_writer import write_h264
 from somprompt import draw_marks, mark_video
 
 from .media import write_demo_clip, write_labels_zip
-from .segmentation import Segmentation, max_frames_for, segment_window
+from .segmentation import MAX_VIDEO_SIDE, Segmentation, max_frames_for, segment_window
 from .tool import answer_question, describe_motionbits
 from .vlm import VLMError, make_vlm, vlm_spec_help
 
@@ -44,12 +44,12 @@ class DemoLimits:
 
     Attributes:
         max_mb: largest upload, MB.
-        max_side: longest side of the video, pixels.
+        max_side: longest side of the video, pixels (the tools' ``MAX_VIDEO_SIDE`` at most).
         max_frames: most frames processed in one run (after start / frames / step).
     """
 
     max_mb: float = 100.0
-    max_side: int = 1920
+    max_side: int = MAX_VIDEO_SIDE
     max_frames: int = 300
 
     def text(self) -> str:

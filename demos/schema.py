@@ -11,10 +11,12 @@ from typing import Any
 
 from motionbits import MotionBitsConfig
 
-from .segmentation import MAX_NODES
+from .segmentation import MAX_NODES, MAX_VIDEO_SIDE
 
 __all__ = ["ASK_ABOUT_MOTION", "SEGMENT_MOVING_BODIES", "openai_tools"]
 
+_VIDEO = {"type": "string", "description": "Path of a video file or a folder of images, at most "
+                                          f"{MAX_VIDEO_SIDE} px on the longer side."}
 _WINDOW = {
     "start": {"type": "integer", "minimum": 0, "default": 0,
               "description": "Index of the first frame used (0-based)."},
@@ -38,7 +40,7 @@ SEGMENT_MOVING_BODIES: dict[str, Any] = {
     "parameters": {
         "type": "object",
         "properties": {
-            "video": {"type": "string", "description": "Path of a video file or a folder of images."},
+            "video": _VIDEO,
             **_WINDOW,
             "marked_image": {"type": ["string", "null"], "default": None,
                              "description": "Optional .png/.jpg path for the marked last frame."},
@@ -57,7 +59,7 @@ ASK_ABOUT_MOTION: dict[str, Any] = {
     "parameters": {
         "type": "object",
         "properties": {
-            "video": {"type": "string", "description": "Path of a video file or a folder of images."},
+            "video": _VIDEO,
             "question": {"type": "string", "description": "The question about the video."},
             **_WINDOW,
         },

@@ -9,13 +9,16 @@ from functools import cached_property
 from pathlib import Path
 from typing import Callable
 
+import cv2
 import numpy as np
 
 from motionbits import MotionBitsConfig, MotionBitsSegmenter, iter_frames
+from motionbits.segmenter import MIN_WORK_SIDE, min_short_side, work_size
+from motionbits.video import IMAGE_SUFFIXES
 from somprompt import MarkRegistry
 
-__all__ = ["MAX_NODES", "MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation", "check_window", "max_frames_for",
-           "segment_window"]
+__all__ = ["MAX_NODES", "MAX_VIDEO_SIDE", "MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation",
+           "check_frame_shape", "check_window", "max_frames_for", "segment_window"]
 
 #: Most frames one call processes (frames and label maps are kept in memory and returned) ...
 MAX_WINDOW_FRAMES = 300
@@ -26,6 +29,10 @@ MAX_WINDOW_PIXELS = 300 * 480 * 640
 #: memory grow fast beyond (100,000 nodes: over 2 minutes and 2 GB for 3 frames of a 16x16
 #: clip; 1,000,000: out of memory).
 MAX_NODES = 40_000
+#: Longest frame side accepted, px (the web app's limit too). The segmenter works at 640 px
+#: whatever the input, but the frames are decoded, kept and returned at full size with a
+#: label map each: a 3840x2160 video took 974 MB for 11 frames, a 7680x4320 one 1.2 GB for 2.
+MAX_VIDEO_SIDE = 1920
 
 
 def max_frames_for(height: int, width: int) -> int:
@@ -100,6 +107,31 @@ def check_window(start: object = 0, frames: object = None, every: object = 1,
     return s, f, e, n
 
 
+def check_frame_shape(height: int, width: int, config: MotionBitsConfig) -> None:
+    """Refuse frames too large to hold or too thin for the segmenter, saying what size
+    the video must have.
+
+    The segmenter's own error (``crop it or raise max_side``) speaks to library users;
+    here the user can only change the video, so the message gives its smallest size.
+
+    Raises:
+        ValueError: the longer side is over ``MAX_VIDEO_SIDE``, or the shorter one is
+            below ``min_short_side`` for the longer one.
+    """
+    if max(height, width) > MAX_VIDEO_SIDE:
+        raise ValueError(f"the video's frames are {width}x{height}, over the limit of {MAX_VIDEO_SIDE} px "
+                         f"on the longer side (the segmenter works at {config.max_side} px anyway); "
+                         f"downscale it first, e.g. ffmpeg -i IN -vf scale={MAX_VIDEO_SIDE}:-2 OUT "
+                         "(for a portrait video scale=-2:1920)")
+    if min(work_size(height, width, config.max_side)) >= MIN_WORK_SIDE:
+        return
+    long_side = max(height, width)
+    need = min_short_side(long_side, config.max_side)
+    raise ValueError(f"the video's frames are {width}x{height}, too thin to segment: with a longer "
+                     f"side of {long_side} px the shorter side must be at least {need} px; "
+                     "crop the video to a less elongated region")
+
+
 def _check_video(video: object) -> Path:
     if not isinstance(video, (str, os.PathLike)) or not str(video).strip():
         raise ValueError(f"video must be the path of a video file or image folder, got {video!r}")
@@ -107,6 +139,20 @@ def _check_video(video: object) -> Path:
     if not path.exists():
         raise FileNotFoundError(f"video not found: {path}")
     return path
+
+
+def _declared_size(path: Path) -> tuple[int, int] | None:
+    """(H, W) of a video file's frames as its header declares them, read without decoding
+    a frame (a 7680x4320 frame alone takes hundreds of MB to decode); None for an image
+    or a folder, or when unknown: the first decoded frame is checked then."""
+    if path.is_dir() or path.suffix.lower() in IMAGE_SUFFIXES:
+        return None
+    cap = cv2.VideoCapture(str(path))
+    try:
+        h, w = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)), int(cap.get(cv2.CAP_PROP_FRAME_WIDTH))
+    finally:
+        cap.release()
+    return (h, w) if h > 0 and w > 0 else None
 
 
 def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | None = None,
@@ -129,18 +175,24 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
 
     Raises:
         FileNotFoundError: no such file or folder.
-        ValueError: a bad argument, an unreadable video, fewer than two frames in the
-            window, or more than ``max_frames_for(H, W)``.
+        ValueError: a bad argument, an unreadable video, frames over ``MAX_VIDEO_SIDE``
+            or too thin to segment (:func:`check_frame_shape`), fewer than two frames in
+            the window, or more than ``max_frames_for(H, W)``.
     """
     start, frames, every, n_nodes = check_window(start, frames, every, n_nodes)
     path = _check_video(video)
     cfg = (config or MotionBitsConfig()).with_(n_nodes=n_nodes)
+    declared = _declared_size(path)
+    if declared is not None:
+        check_frame_shape(*declared, cfg)
     seg = MotionBitsSegmenter(cfg)
     out = Segmentation(str(path), [], [], [], config=cfg)
     t0 = time.perf_counter()
     cap = MAX_WINDOW_FRAMES
     window: list[tuple[int, np.ndarray]] = []  # read the whole window first: no segmenting in vain
     for i, frame in enumerate(iter_frames(path)):
+        if i == 0:  # images (and a header that was wrong): refused at one frame's cost
+            check_frame_shape(*frame.shape[:2], cfg)
         if i < start or (i - start) % every:
             continue
         if not window:

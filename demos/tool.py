@@ -94,7 +94,8 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
     """Segment the moving rigid bodies of a video and describe each for an agent.
 
     Args:
-        video: path of a video file or of a folder of images.
+        video: path of a video file or of a folder of images, at most ``MAX_VIDEO_SIDE``
+            (1920) px on the longer side.
         start: first frame used (0-based).
         frames: number of frames used (>= 2; None: to the end of the video).
         every: use every ``every``-th frame.
@@ -109,8 +110,8 @@ def segment_moving_bodies(video: "str | os.PathLike", *, start: int = 0, frames:
 
     Raises:
         FileNotFoundError: the video (or the folder of ``marked_image``) does not exist.
-        ValueError: a bad argument, an unreadable / too short video, or a ``marked_image``
-            that cannot be written.
+        ValueError: a bad argument, an unreadable / too short video, frames too large or
+            too thin, or a ``marked_image`` that cannot be written.
     """
     marked = None if marked_image is None else _marked_path(marked_image)
     seg = segment_window(video, start=start, frames=frames, every=every, n_nodes=n_nodes)

@@ -15,6 +15,10 @@ __all__ = ["VLMError", "check_vlm_spec", "make_vlm", "stub_answer", "vlm_spec_he
 
 #: transformers ``model_type`` (config.json) -> ``vlm_adapters.load_vlm`` kind
 _MODEL_TYPES = {"qwen2_5_vl": "qwen2.5-vl", "internvl": "internvl", "video_llama_3": "videollama3"}
+#: kinds whose checkpoints exist only as remote code (transformers runs Python files of the
+#: checkpoint folder: ``trust_remote_code``). Naming one in the spec is the opt-in, so it
+#: must name a local folder, whose code the user can read, never a hub id to download.
+_REMOTE_CODE_KINDS = {"internvideo2.5"}
 
 
 class VLMError(RuntimeError):
@@ -25,8 +29,8 @@ def vlm_spec_help() -> str:
     """The VLM specs :func:`make_vlm` accepts, in one line."""
     return ("stub (default, scripted: does not look at the video), stub:TEXT, a local model folder "
             "(Qwen2.5-VL, InternVL or VideoLLaMA3 in transformers format), KIND:PATH "
-            "(qwen2.5-vl, internvl, videollama3, internvideo2.5), openai:URL@MODEL "
-            "(an OpenAI-compatible server such as vLLM)")
+            "(qwen2.5-vl, internvl, videollama3, internvideo2.5: this one runs the Python files "
+            "of its folder), openai:URL@MODEL (an OpenAI-compatible server such as vLLM)")
 
 
 def stub_answer(label_maps: Sequence[np.ndarray]) -> str:
@@ -69,6 +73,11 @@ def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float
     Returns:
         An object with ``generate(frames, prompt, system=None) -> str``.
 
+    ``internvideo2.5:FOLDER`` loads with transformers' ``trust_remote_code=True``: the
+    checkpoint exists only as remote code, so the Python files in FOLDER run; naming that
+    kind with a local folder is the opt-in (a hub id is refused: nothing is downloaded
+    and run unread).
+
     Raises:
         VLMError: the spec is malformed, the folder is not a supported model, or loading
             failed (the message says why in one line).
@@ -86,6 +95,9 @@ def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float
             if not at or not url or not model:
                 raise ValueError(f"use openai:URL@MODEL, got {spec!r}")
             return OpenAICompatibleVLM(url, model, timeout=timeout)
+        if kind in _REMOTE_CODE_KINDS:
+            _check_remote_code_folder(kind, arg)
+            return load_vlm(spec, trust_remote_code=True)
         return load_vlm(spec)
     except Exception as exc:  # any loader failure becomes one readable line
         raise _load_error(spec, exc) from exc
@@ -93,7 +105,8 @@ def make_vlm(spec: str = "stub", *, stub_text: str | None = None, timeout: float
 
 def check_vlm_spec(spec: str) -> None:
     """Check a spec of :func:`make_vlm` without loading anything: its form, that the model
-    folder or checkpoint exists, that an endpoint's URL is well formed.
+    folder or checkpoint exists (a local folder for ``internvideo2.5:``, whose code runs),
+    that an endpoint's URL is well formed.
 
     Raises:
         VLMError: what is wrong, in one line.
@@ -104,9 +117,20 @@ def check_vlm_spec(spec: str) -> None:
     if spec.lower() == "stub":
         return
     try:
-        check_vlm_files(*parse_vlm_spec(spec))
+        kind, arg = parse_vlm_spec(spec)
+        check_vlm_files(kind, arg)
+        if kind in _REMOTE_CODE_KINDS:
+            _check_remote_code_folder(kind, arg)
     except Exception as exc:
         raise _load_error(spec, exc) from exc
+
+
+def _check_remote_code_folder(kind: str, arg: str) -> None:
+    """A remote-code kind runs the code of a local folder only (ValueError otherwise)."""
+    if not os.path.isdir(os.path.expanduser(arg)):
+        raise ValueError(f"{kind} checkpoints run their own Python code, so give the local folder that "
+                         f"holds it (read its .py files first), e.g. one made with `huggingface-cli "
+                         f"download OpenGVLab/InternVideo2_5_Chat_8B --local-dir DIR`; {arg!r} is not a folder")
 
 
 def _resolve(spec: str | None) -> str:

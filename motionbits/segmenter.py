@@ -55,6 +55,26 @@ MIN_WORK_SIDE = 20
 #: the pixel parameters hold); ``max_side`` never upsamples beyond max(input, this).
 REFERENCE_SIDE = 640
 
+
+def work_size(height: int, width: int, max_side: int) -> tuple[int, int]:
+    """(H, W) at which the segmenter processes frames of ``height`` x ``width``: longest
+    side ``max_side``, but above the input's size only up to ``REFERENCE_SIDE`` (pixel
+    parameters are tuned there): the cost is bounded by design."""
+    side = min(max_side, max(height, width, REFERENCE_SIDE))
+    scale = side / max(height, width)
+    return int(round(height * scale)), int(round(width * scale))
+
+
+def min_short_side(long_side: int, max_side: int) -> int:
+    """Shortest frame side the segmenter accepts when the longest is ``long_side``: both
+    working sides (:func:`work_size`) need ``MIN_WORK_SIDE`` px for the optical flow."""
+    scale = min(max_side, max(long_side, REFERENCE_SIDE)) / long_side
+    short = max(1, int((MIN_WORK_SIDE - 1) / scale))  # rounds to at most MIN_WORK_SIDE - 1
+    while min(work_size(short, long_side, max_side)) < MIN_WORK_SIDE:
+        short += 1
+    return short
+
+
 #: a MotionBit is shown only if its mask covers this many grid cells (about 120 px at 640x480)
 MIN_SHOWN_CELLS = 4
 
@@ -154,11 +174,7 @@ class MotionBitsSegmenter:
 
     def _start(self, frame: np.ndarray) -> None:
         h, w = frame.shape[:2]
-        # longest working side: max_side, but above the input's size only up to
-        # REFERENCE_SIDE (pixel parameters are tuned there): the cost is bounded by design
-        side = min(self.config.max_side, max(h, w, REFERENCE_SIDE))
-        scale = side / max(h, w)
-        hw, ww = self._work_size = (int(round(h * scale)), int(round(w * scale)))
+        hw, ww = self._work_size = work_size(h, w, self.config.max_side)
         if min(hw, ww) < MIN_WORK_SIDE:
             raise ValueError(
                 f"frame {self.frame_index + 1} is {w}x{h}: at max_side={self.config.max_side} it is "

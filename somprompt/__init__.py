@@ -26,6 +26,7 @@ from .answers import (
     masks_for_ids,
     parse_answer,
     parse_named_objects,
+    repair_text,
 )
 from .colors import Color, ColorPalette, contrast_ratio, contrasting_color, relative_luminance, to_hex
 from .inputs import as_rgb_array, check_label_map
@@ -72,7 +73,7 @@ __all__ = [
     "format_mark_list", "mark_prompt_variables",
     # answers
     "parse_answer", "find_citations", "ParsedAnswer", "Citation", "masks_for_ids",
-    "parse_named_objects", "NamedObject",
+    "parse_named_objects", "NamedObject", "repair_text",
     # pipeline
     "GroundedVQA", "GroundedVQAResult", "Segmenter", "VLM",
     # input checks

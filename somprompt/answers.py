@@ -16,6 +16,10 @@ keyword + mark        ``mark 3``, ``Mark #3``, ``object 3``, ``objects 3, 5 and 
 hash                  ``#3`` (not inside words, HTML entities or colours like ``#3cb44b``)
 ====================  ===============================================================
 
+Any string is accepted: lone UTF-16 surrogates (``"\\ud800"``, from a JSON escape or
+``surrogateescape`` decoding) become U+FFFD and split surrogate pairs are joined
+(:func:`repair_text`), so parsed text always encodes to UTF-8.
+
 Not citations: bare numbers (``3 cups``, ``at 3 o'clock``, ``1. the cup``), decimals
 (``3.5``), numbers after a keyword that are followed by a unit (``object 3 cm away``),
 and four-digit numbers from 1800 to 2199 that are no known mark (years). Only tokens of
@@ -43,7 +47,10 @@ __all__ = [
     "masks_for_ids",
     "NamedObject",
     "parse_named_objects",
+    "repair_text",
 ]
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
 _KW = r"(?i:marks?|markers?|objects?|regions?|labels?|masks?|segments?|items?|ids?|bod(?:y|ies))"
 _SEP = r"(?:\s*[,;/&]\s*(?:(?i:and|or)\s+)?|\s+(?i:and|or)\s+)"
@@ -96,7 +103,7 @@ class ParsedAnswer:
     """What an answer cites.
 
     Attributes:
-        answer: the answer text.
+        answer: the answer text (after :func:`repair_text`: it encodes to UTF-8).
         ids: object ids of the cited marks, in order of first mention, no repeats.
         unknown: cited marks (as text) that do not exist, in order of first mention.
         citations: every citation, in text order.
@@ -129,6 +136,16 @@ class ParsedAnswer:
         """(H, W) bool union of the cited masks, or None without a label map."""
         lm = self.label_map
         return None if lm is None else lm > 0
+
+
+def repair_text(text: str) -> str:
+    """``text`` as valid Unicode, which encodes to UTF-8: a surrogate pair held as two
+    code points becomes its character, a lone surrogate becomes U+FFFD (so one code point
+    stays one, and the rest of the text keeps its offsets). Text without surrogates is
+    returned as is."""
+    if not _SURROGATE.search(text):
+        return text
+    return text.encode("utf-16-le", "surrogatepass").decode("utf-16-le", "replace")
 
 
 def find_citations(answer: str, style: MarkStyle = "number") -> list[tuple[str, int, int]]:
@@ -174,7 +191,8 @@ def parse_answer(
     """Find the marks an answer cites and return their masks.
 
     Args:
-        answer: the VLM's text. Any string is accepted; garbage cites nothing.
+        answer: the VLM's text. Any string is accepted; garbage cites nothing. It is
+            read (and kept as ``ParsedAnswer.answer``) after :func:`repair_text`.
         marks: a :class:`MarkRegistry` (mark texts are mapped through it; its style is
             used); or an iterable of object ids shown with number = id; or None: number
             = id, and the ids present in ``labels`` (if given) are the known ones.
@@ -199,6 +217,7 @@ def parse_answer(
             f"answer must be the VLM's text (str), got {type(answer).__name__}; "
             "if the VLM returned None it produced no answer"
         )
+    answer = repair_text(answer)
     lm = None if labels is None else check_label_map(labels)
     present = None if lm is None else {int(i) for i in np.unique(lm) if i != 0}
 
@@ -301,7 +320,8 @@ def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedO
     is the toolkit's one parser for that answer (the VLM -> YOLOE path of
     ``vlm_adapters`` uses it too).
 
-    Names are lower-cased and stripped of marks, markdown and a leading article; lines
+    The answer is read after :func:`repair_text`. Names are lower-cased and stripped
+    of marks, markdown and a leading article; lines
     naming nothing (``- none: ...``), names of more than six words and repeated names
     are skipped; lines out of the format are ignored.
 
@@ -315,6 +335,7 @@ def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedO
     """
     if not isinstance(answer, str):
         raise TypeError(f"answer must be a str, got {type(answer).__name__}")
+    answer = repair_text(answer)
     out: list[NamedObject] = []
     seen: set[str] = set()
     for line in answer.splitlines():

@@ -59,7 +59,8 @@ class GroundedVQAResult:
         marks: id -> :class:`MarkInfo` of the marks shown (geometry in the VLM frames).
         prompt: the prompt sent.
         system: the system prompt sent (or None).
-        answer: the VLM's text.
+        answer: the VLM's text, after :func:`somprompt.answers.repair_text` (a lone
+            UTF-16 surrogate becomes U+FFFD: the answer always encodes to UTF-8).
         parsed: citations found in the answer, with masks from the last label map
             (full resolution).
     """
@@ -263,5 +264,5 @@ class GroundedVQA:
         return GroundedVQAResult(
             frames=imgs, label_maps=maps, registry=registry, frame_indices=idx,
             marked_frames=list(marked.frames), marks=marked.marks, prompt=prompt, system=system,
-            answer=answer, parsed=parsed, generation=dict(self.generation),
+            answer=parsed.answer, parsed=parsed, generation=dict(self.generation),
         )

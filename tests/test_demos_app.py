@@ -42,21 +42,26 @@ def _status_of_run(h, path, **kw):
     ("too_large", "over the limit of 100 px"),
     ("window", "start frame 50 is past the end"),
     ("too_long", "the window holds 6 frames, over the limit of 3 at 160x120"),
+    ("thin", "frames are 1000x16, too thin to segment: with a longer side of 1000 px the shorter "
+             "side must be at least 31 px; crop the video"),
 ])
 def test_bad_input_is_a_readable_message(tmp_path, clip, case, words):
     limits = {"too_large": DemoLimits(max_side=100), "too_long": DemoLimits(max_frames=3)}
     h = _handlers(tmp_path, limits=limits.get(case, DemoLimits()))
     paths = {"none": None, "missing": tmp_path / "gone.mp4", "text": tmp_path / "a.txt", "empty": tmp_path / "empty.mp4",
-             "one_frame": tmp_path / "one.mp4", "too_large": clip, "window": clip, "too_long": clip}
+             "one_frame": tmp_path / "one.mp4", "too_large": clip, "window": clip, "too_long": clip,
+             "thin": tmp_path / "thin.mp4"}
     (tmp_path / "a.txt").write_text("hello")
     (tmp_path / "empty.mp4").write_bytes(b"")
     write_h264([np.zeros((32, 32, 3), np.uint8)], tmp_path / "one.mp4")
+    write_h264([np.full((16, 1000, 3), 40 * i, np.uint8) for i in range(3)], tmp_path / "thin.mp4")
     out = _status_of_run(h, None if paths[case] is None else str(paths[case]),
                          start=50 if case == "window" else 0)
     assert out[:5] == (None, [], None, None, None)
     status = out[5]
     assert status.startswith("**Error:**") and words in status, status
     assert "\n" not in status and "Traceback" not in status
+    assert "max_side" not in status  # a segmenter setting the page does not offer
 
 
 @pytest.mark.parametrize("fields, words", [

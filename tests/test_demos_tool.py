@@ -115,6 +115,75 @@ def test_bad_videos(tmp_path):
         ask_about_motion(str(one), "  ")
 
 
+def test_thin_video_says_its_smallest_size(tmp_path, monkeypatch):
+    """The segmenter's 'crop it or raise max_side' is for library users: a tool user can
+    only change the video, so the message gives the size it needs, before segmenting."""
+    import demos.segmentation
+    from PIL import Image
+
+    class Refuses:
+        def __init__(self, *a, **k):
+            pass
+
+        def update(self, frame):
+            pytest.fail("segmented a frame that is too thin")
+
+    monkeypatch.setattr(demos.segmentation, "MotionBitsSegmenter", Refuses)
+    for i in range(2):
+        Image.fromarray(np.full((8, 1000, 3), 60 * i, np.uint8)).save(tmp_path / f"{i}.png")
+    with pytest.raises(ValueError) as err:
+        segment_moving_bodies(str(tmp_path), n_nodes=100)
+    assert str(err.value) == ("the video's frames are 1000x8, too thin to segment: with a longer side of "
+                              "1000 px the shorter side must be at least 31 px; crop the video to a less "
+                              "elongated region")
+
+
+def test_large_frames_are_refused_before_decoding(tmp_path, monkeypatch):
+    """Frames over MAX_VIDEO_SIDE are refused from a video file's header, before any frame
+    is decoded, and in a folder of images once the first one is (whatever ``start``); not
+    after decoding the window at full size."""
+    import demos.segmentation
+    from PIL import Image
+
+    decoded = []
+
+    def counting(path):
+        for frame in iter_frames(path):
+            decoded.append(frame.shape)
+            yield frame
+
+    from motionbits import iter_frames
+    monkeypatch.setattr(demos.segmentation, "iter_frames", counting)
+    for i in range(4):
+        Image.fromarray(np.full((100, 2000, 3), 60 * i, np.uint8)).save(tmp_path / f"{i}.png")
+    for start in (0, 2):
+        decoded.clear()
+        with pytest.raises(ValueError) as err:
+            segment_moving_bodies(str(tmp_path), start=start, frames=2, n_nodes=100)
+        assert str(err.value).startswith("the video's frames are 2000x100, over the limit of 1920 px on the "
+                                         "longer side (the segmenter works at 640 px anyway); downscale it")
+        assert decoded == [(100, 2000, 3)]
+    wide = write_h264([np.full((100, 2000, 3), 60 * i, np.uint8) for i in range(2)], tmp_path / "wide.mp4")
+    decoded.clear()
+    with pytest.raises(ValueError, match="frames are 2000x100, over the limit of 1920 px"):
+        ask_about_motion(str(wide), "What moved?", n_nodes=100)
+    assert decoded == []
+
+
+def test_min_short_side_is_the_segmenters_limit():
+    """``min_short_side`` (the size the demos' message names) is exactly where the
+    segmenter starts accepting frames."""
+    from motionbits import MotionBitsConfig, MotionBitsSegmenter
+    from motionbits.segmenter import min_short_side
+
+    for long_side, max_side in [(4000, 640), (1000, 640), (300, 640), (900, 160)]:
+        need = min_short_side(long_side, max_side)
+        config = MotionBitsConfig(n_nodes=100, max_side=max_side)
+        with pytest.raises(ValueError, match="raise max_side"):  # the core's message, unchanged
+            MotionBitsSegmenter(config).update(np.zeros((need - 1, long_side, 3), np.uint8))
+        MotionBitsSegmenter(config).update(np.zeros((need, long_side, 3), np.uint8))
+
+
 def test_folder_of_mixed_sizes(tmp_path):
     from PIL import Image
 
@@ -147,6 +216,40 @@ def test_check_vlm_spec_loads_nothing(tmp_path):
                        ("openai:localhost@m", "must start with http")]:
         with pytest.raises(VLMError, match=words):
             check_vlm_spec(bad)
+
+
+def test_internvideo25_loads_the_remote_code_of_a_local_folder(tmp_path, monkeypatch):
+    """``internvideo2.5:FOLDER`` is offered by the demos, and that checkpoint exists only as
+    remote code: naming the kind with a local folder is the opt-in, so it loads with
+    ``trust_remote_code=True``; a hub id (code downloaded and run unread) is refused, at
+    start too. Other kinds never get ``trust_remote_code``."""
+    from vlm_adapters import InternVideo25Adapter, Qwen2_5_VLAdapter
+
+    calls = []
+
+    def record(cls, path, **kw):
+        calls.append((cls.__name__, path, kw.get("trust_remote_code", False)))
+        return "loaded"
+
+    for cls in (InternVideo25Adapter, Qwen2_5_VLAdapter):
+        monkeypatch.setattr(cls, "from_pretrained", classmethod(record))
+    assert make_vlm(f"internvideo2.5:{tmp_path}") == "loaded"
+    check_vlm_spec(f"internvideo2.5:{tmp_path}")
+    assert make_vlm(f"qwen2.5-vl:{tmp_path}") == "loaded"
+    assert calls == [("InternVideo25Adapter", str(tmp_path), True), ("Qwen2_5_VLAdapter", str(tmp_path), False)]
+    for check in (make_vlm, check_vlm_spec):
+        with pytest.raises(VLMError, match="run their own Python code, so give the local folder"):
+            check("internvideo2.5:OpenGVLab/InternVideo2_5_Chat_8B")
+    assert len(calls) == 2
+
+
+def test_an_answer_with_a_lone_surrogate_is_returned_encodable(clip):
+    """What the tool returns is written as UTF-8 JSON (the MCP server does): a lone
+    surrogate in the VLM's text is replaced, not passed on to crash there."""
+    seg = segment_window(clip, frames=3, n_nodes=100)
+    ans = answer_question(seg, "What moved?", "stub:It is [1] \ud800.")
+    assert ans.answer == "It is [1] \ufffd."
+    json.dumps({"answer": ans.answer}, ensure_ascii=False).encode("utf-8")
 
 
 def test_vlm_choice_errors(tmp_path, clip):

@@ -1,10 +1,12 @@
 """Answers -> cited marks -> masks, on realistic VLM prose and on arbitrary text."""
 
+import json
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from somprompt import MarkRegistry, find_citations, parse_answer, parse_named_objects
+from somprompt import MarkRegistry, find_citations, parse_answer, parse_named_objects, repair_text
 
 # marks 1..6 shown; object ids are not the mark numbers (ids 11..16)
 REG = MarkRegistry()
@@ -120,6 +122,31 @@ This line has a colon: but no bullet.
     assert objs[0].description == "a glossy red mug, slid 10 cm to the left."
     som = parse_named_objects("- [1][3] glued block: moved as one\n- [2] lid: rotated")
     assert [(o.name, o.marks) for o in som] == [("glued block", ("1", "3")), ("lid", ("2",))]
+
+
+def test_lone_surrogates_are_replaced_so_the_answer_encodes():
+    """A lone UTF-16 surrogate (a JSON "\\ud800" escape, surrogateescape decoding) passed
+    through and crashed whoever encoded the answer (UTF-8, json.dumps(ensure_ascii=False))."""
+    text = "The cup [1] \ud800moved; object 2 stayed\udcff. Smile \ud83d\ude00 [3]"
+    p = parse_answer(text, REG)
+    assert p.ids == [11, 12, 13]
+    assert p.answer == "The cup [1] \ufffdmoved; object 2 stayed\ufffd. Smile \U0001f600 [3]"
+    json.dumps({"answer": p.answer}, ensure_ascii=False).encode("utf-8")
+    assert [p.answer[c.start:c.end] for c in p.citations] == ["1", "2", "3"]  # spans in p.answer
+    objs = parse_named_objects("- red \ud800mug: slid \udcff left")
+    assert [(o.name, o.description) for o in objs] == [("red \ufffdmug", "slid \ufffd left")]
+    assert repair_text("no surrogates [1]") == "no surrogates [1]"
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.text(st.one_of(st.characters(min_codepoint=0xD800, max_codepoint=0xDFFF, codec=None,
+                                       exclude_categories=()),
+                        st.sampled_from("[]#123 abmark object-:\n"), st.characters()), max_size=200))
+def test_parsed_text_always_encodes(text):
+    p = parse_answer(text, REG)
+    p.answer.encode("utf-8")
+    for obj in parse_named_objects(text):
+        (obj.name + obj.description).encode("utf-8")
 
 
 @settings(max_examples=300, deadline=None)

@@ -86,6 +86,19 @@ def test_precomputed_label_maps_skip_the_segmenter_and_letters_work():
     assert result.cited_ids == [21, 5]
 
 
+def test_an_answer_with_a_lone_surrogate_comes_back_encodable():
+    """The VLM's text is returned after repair_text: a lone surrogate (here from a JSON
+    escape) would crash whoever writes the answer as UTF-8 or JSON."""
+    import json
+
+    frames, maps = clip(T=3)
+    answer = json.loads('"The block [1] moved \\ud800 and [2] stayed."')
+    result = GroundedVQA(FixedSegmenter(maps), ScriptedVLM(answer))(frames, question="What moved?")
+    assert result.answer == "The block [1] moved \ufffd and [2] stayed." == result.parsed.answer
+    assert result.cited_ids == [result.registry.id_for_text("1"), result.registry.id_for_text("2")]
+    json.dumps({"answer": result.answer}, ensure_ascii=False).encode("utf-8")
+
+
 def test_pipeline_errors_are_clear():
     frames, maps = clip(T=3)
     vlm = ScriptedVLM("[1]")

@@ -155,6 +155,9 @@ def test_free_text_fallback_and_none():
     assert phrases_from_answer(text) == ["robot arm", "wooden cube", "blue bowl"]
     assert phrases_from_answer("- none: nothing moved") == []
     assert phrases_from_answer("- a: x\n- b: y\n- c: z", max_phrases=2) == ["a", "b"]
+    # a lone surrogate (free text or list) is replaced before it reaches the detector's encoder
+    assert phrases_from_answer("- red \ud800block: slid") == ["red \ufffdblock"]
+    assert phrases_from_answer("The red \ud800block slid left.") == ["red block"]
 
 
 # --------------------------------------------------------------------------- label maps

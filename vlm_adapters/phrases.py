@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import re
 
-from somprompt import load_prompt, parse_named_objects
+from somprompt import load_prompt, parse_named_objects, repair_text
 
 __all__ = [
     "PAPER_QUESTION",
@@ -116,6 +116,7 @@ def phrases_from_answer(text: str, max_phrases: int | None = 16) -> list[str]:
     if max_phrases is not None and (isinstance(max_phrases, bool) or not isinstance(max_phrases, int)
                                     or max_phrases < 1):
         raise ValueError(f"max_phrases must be a positive integer or None, got {max_phrases!r}")
+    text = repair_text(text)  # a lone surrogate would reach the detector's text encoder
     names = [obj.name for obj in parse_named_objects(text)]
     if not names and not _SAYS_NONE.search(text):
         names = extract_noun_phrases(text)
