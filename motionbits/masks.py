@@ -73,16 +73,15 @@ def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
     Equals dilating the node mask by one node and upsampling it with nearest-neighbour
     (cv2.INTER_NEAREST's rule: pixel x reads node floor(x * cols / width)), on the box only.
     """
-    m = (node_labels == label).reshape(grid.rows, grid.cols).astype(np.uint8)
-    m = cv2.dilate(m, np.ones((3, 3), np.uint8)) > 0
-    rows, cols = np.flatnonzero(m.any(axis=1)), np.flatnonzero(m.any(axis=0))
-    if len(rows) == 0:
+    m = (node_labels == label).reshape(grid.rows, grid.cols).view(np.uint8)
+    m = cv2.dilate(m, np.ones((3, 3), np.uint8))
+    col0, row0, n_cols, n_rows = cv2.boundingRect(m)  # the node box
+    if n_cols == 0:
         return None
-    node_y, node_x = grid.pixel_nodes
-    ys = np.flatnonzero((node_y >= rows[0]) & (node_y <= rows[-1]))
-    xs = np.flatnonzero((node_x >= cols[0]) & (node_x <= cols[-1]))
-    box = slice(ys[0], ys[-1] + 1), slice(xs[0], xs[-1] + 1)
-    return box[0], box[1], m[np.ix_(node_y[box[0]], node_x[box[1]])]
+    node_y, node_x = grid.pixel_nodes  # non-decreasing: a node box is a pixel box
+    rows = slice(np.searchsorted(node_y, row0), np.searchsorted(node_y, row0 + n_rows))
+    cols = slice(np.searchsorted(node_x, col0), np.searchsorted(node_x, col0 + n_cols))
+    return rows, cols, m[node_y[rows]][:, node_x[cols]].view(bool)
 
 
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,

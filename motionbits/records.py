@@ -126,6 +126,19 @@ def group_map(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
     return lut[labels]
 
 
+def _area_centroid(mask: np.ndarray, corner: tuple[int, int]) -> tuple[int, tuple[float, float]]:
+    """Pixel count and (x, y) mean position of an (h, w) bool ``mask`` whose top-left pixel
+    is ``corner`` (y, x) of the image; the mask must not be empty. The coordinate sums are
+    exact integers, so the means equal those of ``np.nonzero``'s coordinates, without
+    building them."""
+    per_col = np.count_nonzero(mask, axis=0)
+    per_row = np.count_nonzero(mask, axis=1)
+    area = int(per_col.sum())
+    sum_x = int(per_col @ np.arange(corner[1], corner[1] + mask.shape[1]))
+    sum_y = int(per_row @ np.arange(corner[0], corner[0] + mask.shape[0]))
+    return area, (sum_x / area, sum_y / area)
+
+
 def build_result(frame_index: int, shown: np.ndarray, node_ids: np.ndarray, ids: np.ndarray,
                  thetas: np.ndarray, trans: np.ndarray, moving: set[int], rep: dict[int, int],
                  source: dict[int, int], spans: MotionSpans, grid: NodeGrid,
@@ -167,12 +180,11 @@ def build_result(frame_index: int, shown: np.ndarray, node_ids: np.ndarray, ids:
         tw = twists[source[lab]] if lab in source else np.zeros(3)
         first = [spans.first[i] for i in group if i in spans.first]
         last = [spans.last[i] for i in group if i in spans.last]
-        ys, xs = np.nonzero(out[box] == lab)
-        ys, xs = ys + box[0].start, xs + box[1].start
+        area, centroid = _area_centroid(out[box] == lab, (box[0].start, box[1].start))
         records.append(MotionBit(
-            id=lab, area=int(len(xs)),
+            id=lab, area=area,
             bbox=(box[1].start, box[0].start, box[1].stop, box[0].stop),
-            centroid=(float(xs.mean()), float(ys.mean())),
+            centroid=centroid,
             twist=(float(tw[0]), float(tw[1] * scale[0]), float(tw[2] * scale[1])),
             moving=any(i in moving for i in group),
             first_moved=min(first, default=frame_index),

@@ -9,6 +9,7 @@ from motionbits.boxes import label_boxes
 from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
+from motionbits.masks import _support_box
 from motionbits.merging import touching_pairs
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.records import twist_sources
@@ -121,3 +122,20 @@ def test_twist_sources_are_the_largest_members_with_motion():
     # 2 has the most nodes of group 1; 5 has no motion this frame (no cluster)
     assert twist_sources(node_ids, np.array([1, 2, 3, 4]), rep) == {1: 2, 3: 3}
     assert twist_sources(node_ids, np.array([1, 3]), rep) == {1: 1, 3: 3}
+
+
+def test_support_box_is_the_dilated_node_mask_upsampled():
+    grid = NodeGrid.build(48, 64, 10, 4)  # 4.8 x 6.4 px cells: uneven pixel rows per node
+    rng = np.random.default_rng(6)
+    for _ in range(30):
+        node_labels = np.where(rng.random(grid.n) < rng.uniform(0, 0.1), 2, 0)
+        full = grid.to_image(cv2.dilate((node_labels == 2).reshape(10, 10).astype(np.uint8),
+                                        np.ones((3, 3), np.uint8)))
+        support = _support_box(grid, node_labels, 2)
+        if not full.any():
+            assert support is None
+            continue
+        rows, cols, inside = support
+        ys, xs = np.nonzero(full)
+        assert (rows, cols) == (slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1))
+        np.testing.assert_array_equal(inside, full[rows, cols] > 0)

@@ -9,7 +9,8 @@ from motionbits.identity import identify_clusters
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid
 from motionbits.propagation import propagate_components
-from motionbits.records import MotionSpans, build_result, group_map, moving_ids, twist_sources
+from motionbits.records import (MotionSpans, _area_centroid, build_result, group_map, moving_ids,
+                                twist_sources)
 from motionbits.retirement import retire
 from motionbits.twists import nodes_to_fit
 
@@ -151,6 +152,19 @@ def test_moving_ids_spans_and_records():
     # the twist of the larger member, forward, in input pixels (2x the working size)
     assert mb.twist == (0.0, 2.0, 0.0)
     assert res.node_labels.shape == (4, 4) and set(res.node_labels.ravel()) == {0, 1}
+
+
+def test_area_centroid_equals_the_mean_of_the_pixel_coordinates():
+    rng = np.random.default_rng(4)
+    for _ in range(50):
+        mask = rng.random(rng.integers(1, 60, 2)) < rng.random()
+        mask[rng.integers(mask.shape[0]), rng.integers(mask.shape[1])] = True
+        corner = tuple(int(c) for c in rng.integers(0, 400, 2))
+        ys, xs = np.nonzero(mask)
+        area, (cx, cy) = _area_centroid(mask, corner)
+        # bit-identical to the means of np.nonzero's coordinates (not just close)
+        assert (area, cx, cy) == (len(xs), float((xs + corner[1]).mean()),
+                                  float((ys + corner[0]).mean()))
 
 
 def test_project_past_max_projects_stacked_graphs_alike():
