@@ -18,9 +18,10 @@ import cv2
 import numpy as np
 
 from motionbits.boxes import label_boxes
+from motionbits.revealed import StaticMemory
 from motionbits.twists import rigid_matrix
 
-__all__ = ["Origin", "origin_residuals", "moved_evidence", "retire"]
+__all__ = ["Origin", "origin_residuals", "moved_evidence", "retire", "retire_shadows"]
 
 #: px: below this median distance between where a MotionBit's own and the world's
 #: accumulated motions put its pixels, the two cannot be told apart (no verdict).
@@ -28,6 +29,9 @@ MIN_SEPARATION = 2.0
 #: About this many of a MotionBit's pixels measure that distance.
 SEPARATION_SAMPLES = 200
 IDENTITY = np.eye(3)
+#: A moving MotionBit more than this share of whose pixels show the static world under a
+#: shadow is a moving cast shadow, not a body.
+SHADOW_SHARE = 0.3
 
 
 @dataclass
@@ -163,3 +167,38 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
             out = np.where(out == i, 0, out)
             del origins[i]
     return out, origins
+
+
+def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
+                   moving: set[int]) -> np.ndarray:
+    """``labels`` without the MotionBits that are moving cast shadows: MotionBits moving
+    now more than ``SHADOW_SHARE`` of whose pixels show the static world as ``memory``
+    remembers it, only darker and with its colour (:meth:`StaticMemory.shadowed`).
+
+    An arm's shadow sweeping a table moves its edges, and the flow follows them; what is
+    under it is the table, dimmed. A body that moves onto the table replaces its colour
+    (unless it is a darker grey on grey, which this takes for a shadow). A body that
+    stands still under a passing shadow does not move: it is not tested.
+
+    Args:
+        labels: (H, W) int32 label map of this frame.
+        cur: (H, W, 3) uint8 current RGB frame.
+        memory: the static world's look, between its ``observe`` and ``update``.
+        moving: ids of the MotionBits moving now.
+
+    Returns:
+        (H, W) int32 label map (``labels`` itself when nothing is retired).
+    """
+    rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
+    if not len(rows) or not moving:
+        return labels
+    box = slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
+    shadow = memory.shadowed(cur, box)
+    if shadow is None:
+        return labels
+    lab = labels[box]
+    area = np.bincount(lab.ravel())
+    dark = np.bincount(lab[shadow], minlength=len(area))
+    gone = np.flatnonzero(dark[1:] > SHADOW_SHARE * area[1:]) + 1
+    gone = gone[np.isin(gone, list(moving))]
+    return labels if not len(gone) else np.where(np.isin(labels, gone), 0, labels)

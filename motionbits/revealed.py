@@ -28,6 +28,15 @@ __all__ = ["StaticMemory"]
 
 #: px, side of the square over which grey-level differences are averaged.
 WINDOW = 5
+#: Largest change of chromaticity (each channel over the sum of the three) of a static
+#: pixel under a cast shadow: a shadow dims the light on a surface, not its colour.
+SHADOW_CHROMA = 0.03
+#: A cast shadow leaves a pixel at a fraction of its remembered brightness in this range.
+SHADOW_GAIN = (0.2, 0.85)
+#: px, side of the square over which a shadow's gain is taken as constant.
+SHADOW_WINDOW = 9
+#: Remembered pixels darker than this sum of the three channels have no reliable colour.
+SHADOW_MIN_SUM = 60
 
 
 def _color_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -90,6 +99,35 @@ class StaticMemory:
         cv2.copyTo(np.minimum(still, cv2.absdiff(cur_gray, self.gray)), revealed.view(np.uint8),
                    still)
         return revealed
+
+    def shadowed(self, cur: np.ndarray, box: tuple[slice, slice]) -> np.ndarray | None:
+        """Where the image box ``box`` shows the remembered static world under a shadow:
+        darker (``SHADOW_GAIN``), with the same colour (``SHADOW_CHROMA``) and the same
+        texture -- the remembered grey levels times the local gain (``SHADOW_WINDOW`` mean)
+        match within ``tolerance`` (``WINDOW`` mean).
+
+        Call between :meth:`observe` and :meth:`update`.
+
+        Args:
+            cur: (H, W, 3) uint8 current RGB frame.
+            box: (rows, cols) slices of the image box.
+
+        Returns:
+            (h, w) bool on the box; None when the memory does not hold (:meth:`observe`
+            returned None).
+        """
+        if self._difference is None:
+            return None
+        now = cur[box].astype(np.float32)
+        then = self.color[box].astype(np.float32)
+        sum_now, sum_then = now.sum(axis=2), then.sum(axis=2)
+        chroma = np.abs(now / (sum_now[..., None] + 1) - then / (sum_then[..., None] + 1))
+        gain = (sum_now + 8) / (sum_then + 8)
+        # the texture under a shadow is the remembered one, dimmed by a smooth gain
+        local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
+        relit = cv2.blur(np.abs(sum_now - local * sum_then), (WINDOW, WINDOW)) / 3
+        return (self.known[box] & (sum_then > SHADOW_MIN_SUM) & (chroma.max(axis=2) < SHADOW_CHROMA)
+                & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
                standing: np.ndarray) -> None:

@@ -40,7 +40,7 @@ from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
-from motionbits.retirement import Origin, retire
+from motionbits.retirement import Origin, retire, retire_shadows
 from motionbits.revealed import StaticMemory
 from motionbits.setdown import SetDown
 from motionbits.temporal import TemporalState
@@ -394,6 +394,7 @@ class MotionBitsSegmenter:
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
+            labels = retire_shadows(labels, cur, self._memory, moving)
             area = np.bincount(labels.ravel())
             rep = self._groups.representatives(np.flatnonzero(area[1:]) + 1)  # ids present
             # a MotionBit born this frame is shown once it moves again, or as part of a

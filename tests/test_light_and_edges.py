@@ -9,6 +9,8 @@ from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import static_residual
 from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import snap_to_edges
+from motionbits.retirement import retire_shadows
+from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
 SIZE = (240, 320)
@@ -111,6 +113,81 @@ def test_moving_shadow_on_texture_is_not_a_motionbit(relight_sigma, expect_marks
     config = CONFIG.with_(relight_sigma=relight_sigma)
     shown = [len(r.motionbits) for r in segment_video(_shadow_clip(), config)]
     assert (max(shown) > 0) == expect_marks, shown
+
+
+def _remembered(base: np.ndarray) -> StaticMemory:
+    """A static memory that saw ``base`` standing still."""
+    memory = StaticMemory(SIZE, tolerance=10.0, covered=20.0)
+    gray = _gray(base)
+    memory.observe(base, gray, np.zeros(SIZE, np.float32), camera_moved=False)
+    memory.update(base, gray, gray, np.ones(SIZE, bool))
+    return memory
+
+
+def _shadow_and_body(base: np.ndarray) -> np.ndarray:
+    """``base`` under a hard shadow (centre (100, 120), radius 40, half the light) with a
+    body of another texture over rows 100:160, columns 200:280."""
+    cur = np.clip(base * _shadow((100, 120), 40, 0.5, soft=2)[..., None], 0, 255)
+    cur = cur.astype(np.uint8)
+    cur[100:160, 200:280] = _texture(7)[100:160, 200:280]
+    return cur
+
+
+def test_memory_sees_a_cast_shadow_not_a_body():
+    base = _texture(0)
+    memory = _remembered(base)
+    cur = _shadow_and_body(base)
+    gray = _gray(cur)
+    memory.observe(cur, gray, np.abs(gray - _gray(base)), camera_moved=False)
+    shadow = memory.shadowed(cur, (slice(0, SIZE[0]), slice(0, SIZE[1])))
+    yy, xx = np.mgrid[:SIZE[0], :SIZE[1]]
+    core = np.hypot(xx - 100, yy - 120) < 35
+    lit = np.hypot(xx - 100, yy - 120) > 50
+    lit[100:160, 200:280] = False
+    assert shadow[core].mean() > 0.95
+    assert shadow[100:160, 200:280].mean() < 0.05  # the body's colours are not the table's
+    assert not shadow[lit].any()  # the lit table looks as remembered: no shadow
+    # a box of the image: the same answer there
+    box = (slice(90, 170), slice(60, 260))
+    np.testing.assert_array_equal(memory.shadowed(cur, box), shadow[box])
+    # no memory under a moving camera
+    memory.observe(cur, gray, np.zeros(SIZE, np.float32), camera_moved=True)
+    assert memory.shadowed(cur, box) is None
+
+
+def test_moving_cast_shadows_are_retired_bodies_and_still_ones_kept():
+    base = _texture(0)
+    memory = _remembered(base)
+    cur = _shadow_and_body(base)
+    gray = _gray(cur)
+    memory.observe(cur, gray, np.abs(gray - _gray(base)), camera_moved=False)
+    labels = np.zeros(SIZE, np.int32)
+    labels[95:145, 75:125] = 1  # on the shadow, moving
+    labels[100:160, 200:280] = 2  # the body, moving
+    labels[150:160, 75:125] = 3  # on the shadow's lower edge, standing still
+    out = retire_shadows(labels, cur, memory, moving={1, 2})
+    assert set(np.unique(out)) == {0, 2, 3}
+    np.testing.assert_array_equal(out[labels != 1], labels[labels != 1])
+    assert set(np.unique(retire_shadows(labels, cur, memory, moving={1, 2, 3}))) == {0, 2}
+    assert retire_shadows(labels, cur, memory, moving=set()) is labels
+
+
+def test_a_moving_shadow_leaves_no_mark_of_its_own(monkeypatch):
+    """On the soft shadow sweeping a texture, no MotionBit shown after its first frames
+    lies inside the shadow; without retiring cast shadows one does."""
+    clip = _shadow_clip()
+
+    def inside_shadow(share_off: bool) -> list[float]:
+        if share_off:
+            monkeypatch.setattr("motionbits.retirement.SHADOW_SHARE", 1.0)
+        shares = []
+        for t, r in enumerate(segment_video(clip, CONFIG)):
+            dark = _shadow((70 + 9 * t, 120), 50, 0.55) < 0.85
+            shares += [dark[r.labels == m.id].mean() for m in r.motionbits if t >= 4]
+        return shares
+
+    assert max(inside_shadow(False), default=0.0) < 0.6
+    assert max(inside_shadow(True)) > 0.9
 
 
 def test_a_textured_body_passes_the_light_test():
