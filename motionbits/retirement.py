@@ -30,8 +30,11 @@ MIN_SEPARATION = 2.0
 SEPARATION_SAMPLES = 200
 IDENTITY = np.eye(3)
 #: A moving MotionBit more than this share of whose pixels show the static world under a
-#: shadow is a moving cast shadow, not a body.
+#: shadow is a moving cast shadow, not a body ...
 SHADOW_SHARE = 0.3
+#: ... if it first moved at most this many frames ago: an older one has shown it is a body
+#: (a body pushed in the agent's shadow looks like one).
+SHADOW_AGE = 5
 
 
 @dataclass
@@ -170,27 +173,33 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
 
 
 def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
-                   moving: set[int]) -> np.ndarray:
+                   moving: set[int], first_moved: dict[int, int], frame_index: int
+                   ) -> np.ndarray:
     """``labels`` without the MotionBits that are moving cast shadows: MotionBits moving
-    now more than ``SHADOW_SHARE`` of whose pixels show the static world as ``memory``
-    remembers it, only darker and with its colour (:meth:`StaticMemory.shadowed`).
+    now, since at most ``SHADOW_AGE`` frames, more than ``SHADOW_SHARE`` of whose pixels
+    show the static world as ``memory`` remembers it, only darker, with its colour and
+    texture (:meth:`StaticMemory.shadowed`).
 
     An arm's shadow sweeping a table moves its edges, and the flow follows them; what is
     under it is the table, dimmed. A body that moves onto the table replaces its colour
     (unless it is a darker grey on grey, which this takes for a shadow). A body that
-    stands still under a passing shadow does not move: it is not tested.
+    stands still under a passing shadow does not move, and one that has moved for longer
+    has shown it is a body: neither is tested.
 
     Args:
         labels: (H, W) int32 label map of this frame.
         cur: (H, W, 3) uint8 current RGB frame.
         memory: the static world's look, between its ``observe`` and ``update``.
         moving: ids of the MotionBits moving now.
+        first_moved: id -> the frame it first moved (:attr:`MotionSpans.first`).
+        frame_index: this frame's index.
 
     Returns:
         (H, W) int32 label map (``labels`` itself when nothing is retired).
     """
+    young = [i for i in moving if frame_index - first_moved.get(i, frame_index) <= SHADOW_AGE]
     rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
-    if not len(rows) or not moving:
+    if not len(rows) or not young:
         return labels
     box = slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
     shadow = memory.shadowed(cur, box)
@@ -200,5 +209,5 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     area = np.bincount(lab.ravel())
     dark = np.bincount(lab[shadow], minlength=len(area))
     gone = np.flatnonzero(dark[1:] > SHADOW_SHARE * area[1:]) + 1
-    gone = gone[np.isin(gone, list(moving))]
+    gone = gone[np.isin(gone, young)]
     return labels if not len(gone) else np.where(np.isin(labels, gone), 0, labels)

@@ -394,7 +394,8 @@ class MotionBitsSegmenter:
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
-            labels = retire_shadows(labels, cur, self._memory, moving)
+            labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
+                                    self.frame_index)
             area = np.bincount(labels.ravel())
             rep = self._groups.representatives(np.flatnonzero(area[1:]) + 1)  # ids present
             # a MotionBit born this frame is shown once it moves again, or as part of a

@@ -9,7 +9,7 @@ from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import static_residual
 from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import snap_to_edges
-from motionbits.retirement import retire_shadows
+from motionbits.retirement import SHADOW_AGE, retire_shadows
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
@@ -155,7 +155,7 @@ def test_memory_sees_a_cast_shadow_not_a_body():
     assert memory.shadowed(cur, box) is None
 
 
-def test_moving_cast_shadows_are_retired_bodies_and_still_ones_kept():
+def test_young_moving_cast_shadows_are_retired_bodies_and_others_kept():
     base = _texture(0)
     memory = _remembered(base)
     cur = _shadow_and_body(base)
@@ -165,11 +165,16 @@ def test_moving_cast_shadows_are_retired_bodies_and_still_ones_kept():
     labels[95:145, 75:125] = 1  # on the shadow, moving
     labels[100:160, 200:280] = 2  # the body, moving
     labels[150:160, 75:125] = 3  # on the shadow's lower edge, standing still
-    out = retire_shadows(labels, cur, memory, moving={1, 2})
+    first_moved = {1: 8, 2: 8, 3: 8}
+    out = retire_shadows(labels, cur, memory, {1, 2}, first_moved, frame_index=10)
     assert set(np.unique(out)) == {0, 2, 3}
     np.testing.assert_array_equal(out[labels != 1], labels[labels != 1])
-    assert set(np.unique(retire_shadows(labels, cur, memory, moving={1, 2, 3}))) == {0, 2}
-    assert retire_shadows(labels, cur, memory, moving=set()) is labels
+    assert set(np.unique(retire_shadows(labels, cur, memory, {1, 2, 3}, first_moved, 10))) == {0, 2}
+    assert retire_shadows(labels, cur, memory, set(), first_moved, 10) is labels
+    # a MotionBit that has moved for more than SHADOW_AGE frames is a body
+    old = {1: 1, 2: 8, 3: 8}
+    assert retire_shadows(labels, cur, memory, {1, 2}, old, 1 + SHADOW_AGE) is not labels
+    assert retire_shadows(labels, cur, memory, {1, 2}, old, 2 + SHADOW_AGE) is labels
 
 
 def test_a_moving_shadow_leaves_no_mark_of_its_own(monkeypatch):
