@@ -182,9 +182,9 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
 
     An arm's shadow sweeping a table moves its edges, and the flow follows them; what is
     under it is the table, dimmed. A body that moves onto the table replaces its colour
-    (unless it is a darker grey on grey, which this takes for a shadow). A body that
-    stands still under a passing shadow does not move, and one that has moved for longer
-    has shown it is a body: neither is tested.
+    or its texture (a flat, darker grey on a flat grey table would pass for a shadow). A
+    body that stands still under a passing shadow does not move, and one that has moved
+    for longer has shown it is a body: neither is tested.
 
     Args:
         labels: (H, W) int32 label map of this frame.

@@ -126,7 +126,8 @@ class StaticMemory:
         # the texture under a shadow is the remembered one, dimmed by a smooth gain
         local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
         relit = cv2.blur(np.abs(sum_now - local * sum_then), (WINDOW, WINDOW)) / 3
-        return (self.known[box] & (sum_then > SHADOW_MIN_SUM) & (chroma.max(axis=2) < SHADOW_CHROMA)
+        return (self.known[box] & (sum_then > SHADOW_MIN_SUM)
+                & (chroma.max(axis=2) < SHADOW_CHROMA)
                 & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
