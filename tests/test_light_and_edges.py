@@ -133,12 +133,19 @@ def _shadow_and_body(base: np.ndarray) -> np.ndarray:
     return cur
 
 
-def test_memory_sees_a_cast_shadow_not_a_body():
+def _observing_shadow_and_body() -> tuple[StaticMemory, np.ndarray]:
+    """A memory that saw a texture standing still, after observing the frame of
+    :func:`_shadow_and_body` on it; and that frame."""
     base = _texture(0)
     memory = _remembered(base)
     cur = _shadow_and_body(base)
     gray = _gray(cur)
     memory.observe(cur, gray, np.abs(gray - _gray(base)), camera_moved=False)
+    return memory, cur
+
+
+def test_memory_sees_a_cast_shadow_not_a_body():
+    memory, cur = _observing_shadow_and_body()
     shadow = memory.shadowed(cur, (slice(0, SIZE[0]), slice(0, SIZE[1])))
     yy, xx = np.mgrid[:SIZE[0], :SIZE[1]]
     core = np.hypot(xx - 100, yy - 120) < 35
@@ -151,16 +158,12 @@ def test_memory_sees_a_cast_shadow_not_a_body():
     box = (slice(90, 170), slice(60, 260))
     np.testing.assert_array_equal(memory.shadowed(cur, box), shadow[box])
     # no memory under a moving camera
-    memory.observe(cur, gray, np.zeros(SIZE, np.float32), camera_moved=True)
+    memory.observe(cur, _gray(cur), np.zeros(SIZE, np.float32), camera_moved=True)
     assert memory.shadowed(cur, box) is None
 
 
 def test_young_moving_cast_shadows_are_retired_bodies_and_others_kept():
-    base = _texture(0)
-    memory = _remembered(base)
-    cur = _shadow_and_body(base)
-    gray = _gray(cur)
-    memory.observe(cur, gray, np.abs(gray - _gray(base)), camera_moved=False)
+    memory, cur = _observing_shadow_and_body()
     labels = np.zeros(SIZE, np.int32)
     labels[95:145, 75:125] = 1  # on the shadow, moving
     labels[100:160, 200:280] = 2  # the body, moving
