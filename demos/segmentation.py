@@ -122,7 +122,7 @@ def check_frame_shape(height: int, width: int, config: MotionBitsConfig) -> None
         raise ValueError(f"the video's frames are {width}x{height}, over the limit of {MAX_VIDEO_SIDE} px "
                          f"on the longer side (the segmenter works at {config.max_side} px anyway); "
                          f"downscale it first, e.g. ffmpeg -i IN -vf scale={MAX_VIDEO_SIDE}:-2 OUT "
-                         "(for a portrait video scale=-2:1920)")
+                         f"(for a portrait video scale=-2:{MAX_VIDEO_SIDE})")
     if min(work_size(height, width, config.max_side)) >= MIN_WORK_SIDE:
         return
     long_side = max(height, width)

@@ -198,16 +198,21 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
         (H, W) int32 label map (``labels`` itself when nothing is retired).
     """
     young = [i for i in moving if frame_index - first_moved.get(i, frame_index) <= SHADOW_AGE]
-    rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
-    if not len(rows) or not young:
+    if not young:
         return labels
-    box = slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
+    boxes = label_boxes(labels, max_label=max(young))
+    young = [i for i in young if boxes[i - 1] is not None]
+    if not young:
+        return labels
+    # the box of the young MotionBits: each lies whole inside it
+    rows, cols = zip(*(boxes[i - 1] for i in young))
+    box = (slice(min(r.start for r in rows), max(r.stop for r in rows)),
+           slice(min(c.start for c in cols), max(c.stop for c in cols)))
     shadow = memory.shadowed(cur, box)
     if shadow is None:
         return labels
     lab = labels[box]
     area = np.bincount(lab.ravel())
     dark = np.bincount(lab[shadow], minlength=len(area))
-    gone = np.flatnonzero(dark[1:] > SHADOW_SHARE * area[1:]) + 1
-    gone = gone[np.isin(gone, young)]
-    return labels if not len(gone) else np.where(np.isin(labels, gone), 0, labels)
+    gone = [i for i in young if dark[i] > SHADOW_SHARE * area[i]]
+    return labels if not gone else np.where(np.isin(labels, gone), 0, labels)

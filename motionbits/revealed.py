@@ -118,17 +118,25 @@ class StaticMemory:
         """
         if self._difference is None:
             return None
-        now = cur[box].astype(np.float32)
-        then = self.color[box].astype(np.float32)
+        # grown by the windows' reach, so that the answer is the whole image's, cropped
+        h, w = self.known.shape
+        r = SHADOW_WINDOW // 2 + WINDOW // 2
+        y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
+        x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
+        grown = slice(y0, y1), slice(x0, x1)
+        inner = (slice(box[0].start - y0, box[0].stop - y0),
+                 slice(box[1].start - x0, box[1].stop - x0))
+        now = cur[grown].astype(np.float32)
+        then = self.color[grown].astype(np.float32)
         sum_now, sum_then = now.sum(axis=2), then.sum(axis=2)
         chroma = np.abs(now / (sum_now[..., None] + 1) - then / (sum_then[..., None] + 1))
         gain = (sum_now + 8) / (sum_then + 8)
         # the texture under a shadow is the remembered one, dimmed by a smooth gain
         local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
         relit = cv2.blur(np.abs(sum_now - local * sum_then), (WINDOW, WINDOW)) / 3
-        return (self.known[box] & (sum_then > SHADOW_MIN_SUM)
-                & (chroma.max(axis=2) < SHADOW_CHROMA)
-                & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
+        shadow = ((sum_then > SHADOW_MIN_SUM) & (chroma.max(axis=2) < SHADOW_CHROMA)
+                  & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
+        return self.known[box] & shadow[inner]
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
                standing: np.ndarray) -> None:
