@@ -18,8 +18,8 @@ from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
-__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "snap_to_edges",
-           "SPECK_CELLS"]
+__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "hide_small",
+           "snap_to_edges", "SPECK_CELLS"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -213,6 +213,27 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
         if len(small):
             out[box][np.isin(comp, small)] = 0
     return out
+
+
+def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
+    """Zero every label whose whole mask covers fewer than ``min_area`` px.
+
+    Unlike :func:`remove_specks` (detached pieces of a label), a label smaller than this
+    is not shown at all.
+
+    Args:
+        label_map: (H, W) int32 labels (0 = background).
+        min_area: px.
+
+    Returns:
+        (H, W) int32 label map (``label_map`` itself if nothing is hidden).
+    """
+    area = np.bincount(label_map.ravel())
+    small = np.flatnonzero(area[1:] < min_area) + 1
+    small = small[area[small] > 0]
+    if not len(small):
+        return label_map
+    return np.where(np.isin(label_map, small), 0, label_map).astype(np.int32)
 
 
 def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:

@@ -32,8 +32,8 @@ from motionbits.graph import (
     twist_edge_weights,
 )
 from motionbits.identity import identify_clusters
-from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, remove_specks,
-                              snap_to_edges)
+from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, hide_small,
+                              remove_specks, snap_to_edges)
 from motionbits.merging import MotionBitGroups, observe_touching, seen_still, standing_still
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
@@ -75,7 +75,8 @@ def min_short_side(long_side: int, max_side: int) -> int:
     return short
 
 
-#: a MotionBit is shown only if its mask covers this many grid cells (about 120 px at 640x480)
+#: a MotionBit (or merged group) is shown only if its shown mask -- trimmed to the image's
+#: edges -- covers this many grid cells (about 120 px at 640x480)
 MIN_SHOWN_CELLS = 4
 
 #: Stage names of the per-frame timing report, in pipeline order. "flow" is the flow
@@ -396,20 +397,14 @@ class MotionBitsSegmenter:
                                            first=self._first)
             labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
                                     self.frame_index)
-            area = np.bincount(labels.ravel())
-            rep = self._groups.representatives(np.flatnonzero(area[1:]) + 1)  # ids present
+            present = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            rep = self._groups.representatives(present)
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown; a piece set down, once it still stands at the
             # next frame
             shown = {r for i, r in rep.items()
                      if i not in self._tentative and i not in self._setdown.pending}
-            # ... and covers at least MIN_SHOWN_CELLS grid cells (smaller ones are flow noise)
-            group_area: dict[int, int] = {}
-            for i, r in rep.items():
-                group_area[r] = group_area.get(r, 0) + int(area[i])
-            min_area = MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1]
-            rep = {i: r if r in shown and group_area[r] >= min_area else 0
-                   for i, r in rep.items()}
+            rep = {i: r if r in shown else 0 for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
@@ -434,6 +429,9 @@ class MotionBitsSegmenter:
             self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
+            # ... and is shown if it still covers MIN_SHOWN_CELLS grid cells (smaller
+            # ones are flow noise, or a sliver of smeared flow that the edges trimmed)
+            shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

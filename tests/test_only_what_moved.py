@@ -5,8 +5,10 @@ import cv2
 import numpy as np
 import pytest
 
+import motionbits.segmenter as segmenter_module
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
+from motionbits.masks import hide_small
 from motionbits.merging import (MotionBitGroups, observe_touching, seen_still, standing_still,
                                 touching_pairs)
 from motionbits.nodes import NodeGrid
@@ -189,3 +191,34 @@ def test_static_memory_reveals_background_seen_again_after_it_was_covered():
     assert not memory.known.any()
     off = StaticMemory(table.shape[:2], tolerance=0.0, covered=20.0)
     assert off.observe(table, table.mean(axis=2), everywhere * 1.0, camera_moved=False) is None
+
+
+def test_hide_small_zeroes_whole_labels_under_the_area():
+    labels = np.zeros((20, 30), np.int32)
+    labels[2:12, 2:12] = 3  # 100 px
+    labels[15:18, 20:23] = 7  # 9 px
+    labels[0, 29] = 3  # a detached pixel of label 3 counts towards its area
+    out = hide_small(labels, 10)
+    assert set(np.unique(out)) == {0, 3} and (out[labels == 3] == 3).all()
+    assert hide_small(labels, 9) is labels  # nothing under 9 px: unchanged
+
+
+def test_a_motionbit_trimmed_below_the_minimum_is_not_shown(monkeypatch):
+    """The minimum area holds for the mask shown, after it is trimmed to the image's
+    edges, not for the motion's mask before (a sliver of smeared flow that the edges
+    trim to a few pixels is not shown)."""
+    clip = render_planar_clip([Body((Polygon.rect(40, 80, 100, 140, texture_seed=3),),
+                                    velocity=(4.0, 0.0))], size=SIZE, n_frames=6, seed=2)
+    shown = [len(r.motionbits) for r in segment_video(clip.frames, CONFIG)]
+    assert shown[-1] == 1  # as it is: one MotionBit
+
+    def trim_to_a_corner(label_map, rgb, band):  # keeps 3 x 3 px of each mask
+        out = np.zeros_like(label_map)
+        for lab in np.unique(label_map[label_map > 0]):
+            ys, xs = np.nonzero(label_map == lab)
+            y, x = ys[0], xs[0]
+            out[y:y + 3, x:x + 3] = np.where(label_map[y:y + 3, x:x + 3] == lab, lab, 0)
+        return out
+
+    monkeypatch.setattr(segmenter_module, "snap_to_edges", trim_to_a_corner)
+    assert all(len(r.motionbits) == 0 for r in segment_video(clip.frames, CONFIG))
