@@ -146,25 +146,36 @@ class MotionBitsSegmenter:
         self._work_size: tuple[int, int] | None = None
         self._grid: NodeGrid | None = None
         self._seeds: np.ndarray | None = None
-        self._prev: np.ndarray | None = None
-        self._prev_gray: np.ndarray | None = None  # (h, w) float32 grey of ``_prev``
-        self._labels: np.ndarray | None = None  # (h, w) int32 working-resolution labels
-        # label history and largest earlier edge weights (whole video or config.window)
-        self._temporal: TemporalState | None = None
-        self._earned: np.ndarray | None = None  # (h, w) int32 evidence of the labels (masks)
-        self._still: np.ndarray | None = None  # (h, w) int32 1 + last frame seen standing still
-        self._joined: np.ndarray | None = None  # (h, w) int32 flat links joined (aperture.py)
-        self._memory: StaticMemory | None = None  # the static world's look (revealed.py)
         self._noise_cov: np.ndarray | None = None  # (n, 3, 3) twist covariance of flow noise
         self._next_id = 1
+        self._spans = MotionSpans()  # first / last frame each id moved
+        self._timings: dict[str, float] = {}
+        self._new_shot()
+
+    def _new_shot(self) -> None:
+        """Forget the motion state (at the start, or at a cut): the next frame is a shot's
+        first. Ids go on from where they were."""
+        self._prev: np.ndarray | None = None
+        self._prev_gray: np.ndarray | None = None  # (h, w) float32 grey of ``_prev``
         self._origins: dict[int, Origin] = {}  # id -> its birth frame and motion since
         self._first: Origin | None = None  # the first frame and the world's motion since
         self._tentative: set[int] = set()  # ids born at the last frame, not yet confirmed
         # pieces a MotionBit left behind (a body set down), new MotionBits
         self._setdown = SetDown(self.config.pixel_evidence, self.config.carry_tolerance)
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
-        self._spans = MotionSpans()  # first / last frame each id moved
-        self._timings: dict[str, float] = {}
+        if self._work_size is None:  # sized at the stream's first frame (_start)
+            self._labels = self._earned = self._still = self._joined = None
+            self._temporal = self._memory = None
+            return
+        hw, ww = self._work_size
+        self._labels = np.zeros((hw, ww), np.int32)  # working-resolution labels
+        # label history and largest earlier edge weights (whole video or config.window)
+        self._temporal = TemporalState((hw, ww), self._grid.neighbors.shape, self.config.window)
+        self._earned = np.zeros((hw, ww), np.int32)  # 1 = its MotionBit showed there (masks)
+        self._still = np.zeros((hw, ww), np.int32)  # 1 + last frame seen standing still (merging)
+        self._joined = np.zeros((hw, ww), np.int32)  # id of the mask that joined it (aperture.py)
+        self._memory = StaticMemory((hw, ww), self.config.reveal_tolerance,  # revealed.py
+                                    self.config.reveal_covered)
 
     # ------------------------------------------------------------------ helpers
     @contextmanager
@@ -184,15 +195,9 @@ class MotionBitsSegmenter:
         self._input_size = (h, w)
         self._grid = NodeGrid.build(hw, ww, self.config.grid_side, self.config.k_neighbors)
         self._seeds = grid_seeds(self._grid.rows, self._grid.cols, self.config.seed_stride)
-        self._labels = np.zeros((hw, ww), np.int32)
-        self._temporal = TemporalState((hw, ww), self._grid.neighbors.shape, self.config.window)
-        self._earned = np.zeros((hw, ww), np.int32)  # 1 = its MotionBit showed there
-        self._still = np.zeros((hw, ww), np.int32)  # 1 + last frame seen standing still (merging)
-        self._joined = np.zeros((hw, ww), np.int32)  # id of the shown mask that joined it
-        self._memory = StaticMemory((hw, ww), self.config.reveal_tolerance,
-                                    self.config.reveal_covered)
         self._noise_cov = twist_noise_covariance(self._grid.points, self._grid.neighbors,
                                                  self.config.flow_noise)
+        self._new_shot()
 
     def _to_work(self, frame: np.ndarray) -> np.ndarray:
         hw, ww = self._work_size
@@ -281,6 +286,10 @@ class MotionBitsSegmenter:
             prior_valid = reliable & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
+            if prior_valid.mean() < cfg.cut_share:  # another scene: a cut, a new shot
+                self._new_shot()
+                self._prev, self._prev_gray = cur, cur_g
+                return self._empty_result()
             (prior, earned, still_seen, joined), history = self._temporal.carry(
                 [self._labels, self._earned, self._still, self._joined], flow_back, back_maps)
             earned = earned > 0

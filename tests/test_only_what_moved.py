@@ -222,3 +222,34 @@ def test_a_motionbit_trimmed_below_the_minimum_is_not_shown(monkeypatch):
 
     monkeypatch.setattr(segmenter_module, "snap_to_edges", trim_to_a_corner)
     assert all(len(r.motionbits) == 0 for r in segment_video(clip.frames, CONFIG))
+
+
+def _relabel_in_order(labels: np.ndarray) -> np.ndarray:
+    """Ids replaced by 1, 2, ... in order of first appearance (raster order)."""
+    ids, first = np.unique(labels, return_index=True)
+    order = ids[np.argsort(first)]
+    order = order[order > 0]
+    lut = np.zeros(labels.max() + 1, np.int32)
+    lut[order] = np.arange(1, len(order) + 1)
+    return lut[labels]
+
+
+def test_a_cut_starts_a_new_shot():
+    """After a cut to another scene the segmenter labels the new shot as it would alone:
+    nothing of the old shot is carried over, and ids go on from the old shot's."""
+    def shot(x0, vx, seed):
+        return render_planar_clip([Body((Polygon.rect(x0, 80, x0 + 60, 140, texture_seed=seed),),
+                                        velocity=(vx, 0.0))], size=SIZE, n_frames=6,
+                                  seed=seed).frames
+    first, second = shot(40, 4.0, 2), shot(200, -3.0, 5)
+    joined = list(segment_video(list(first) + list(second), CONFIG))
+    alone = list(segment_video(second, CONFIG))
+    old_ids = {m.id for r in joined[:6] for m in r.motionbits}
+    assert old_ids
+    for cut, one in zip(joined[6:], alone):
+        assert np.array_equal(_relabel_in_order(cut.labels), _relabel_in_order(one.labels))
+        assert all(m.id > max(old_ids) for m in cut.motionbits)
+    assert len(alone[-1].motionbits) == 1
+    # without the cut test the old shot's MotionBit lives on in the new shot
+    carried = list(segment_video(list(first) + list(second), CONFIG.with_(cut_share=0.0)))
+    assert any(m.id in old_ids for r in carried[6:] for m in r.motionbits)
