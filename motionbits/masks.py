@@ -19,7 +19,7 @@ from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "hide_small",
-           "snap_to_edges", "SPECK_CELLS"]
+           "hide_edgeless", "snap_to_edges", "SPECK_CELLS", "EDGELESS_GRADIENT"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -30,6 +30,12 @@ REFITS = 2
 PHOTO_WINDOW = 3
 #: A detached piece of a label smaller than this many grid cells is a speck.
 SPECK_CELLS = 2
+#: grey levels per px (Sobel, 5x5 mean; :func:`motionbits.evidence.gradient_magnitude`): a
+#: mask whose outline shows less image gradient than this over all but
+#: ``1 - OUTLINE_QUANTILE`` of it, within ``OUTLINE_BAND`` px, is edgeless ...
+EDGELESS_GRADIENT = 3.0
+OUTLINE_QUANTILE = 0.9
+OUTLINE_BAND = 3
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,
@@ -234,6 +240,42 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     if not len(small):
         return label_map
     return np.where(np.isin(label_map, small), 0, label_map).astype(np.int32)
+
+
+def hide_edgeless(label_map: np.ndarray, gradient: np.ndarray) -> np.ndarray:
+    """Zero every label whose outline runs where the image shows no edge.
+
+    A body's outline is an image edge (its colour or shading against its surroundings);
+    a patch of a flat table that a moving soft shadow or smeared flow left labelled looks
+    like its surroundings. A mask is edgeless when the image gradient within
+    ``OUTLINE_BAND`` px of its outline stays under ``EDGELESS_GRADIENT`` on
+    ``OUTLINE_QUANTILE`` of those pixels: no motion could be seen on it, and the mark would
+    point at nothing.
+
+    Args:
+        label_map: (H, W) int32 labels (0 = background).
+        gradient: (H, W) float32 grey levels per px of image gradient
+            (:func:`motionbits.evidence.gradient_magnitude`).
+
+    Returns:
+        (H, W) int32 label map (``label_map`` itself if nothing is hidden).
+    """
+    h, w = label_map.shape
+    r = OUTLINE_BAND + 1
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * OUTLINE_BAND + 1,) * 2)
+    edgeless = []
+    for i, box in enumerate(label_boxes(label_map)):
+        if box is None:
+            continue
+        grown = (slice(max(box[0].start - r, 0), min(box[0].stop + r, h)),
+                 slice(max(box[1].start - r, 0), min(box[1].stop + r, w)))
+        mask = (label_map[grown] == i + 1).astype(np.uint8)
+        outline = (cv2.dilate(mask, disk) > 0) & (cv2.erode(mask, disk) == 0)
+        if np.quantile(gradient[grown][outline], OUTLINE_QUANTILE) < EDGELESS_GRADIENT:
+            edgeless.append(i + 1)
+    if not edgeless:
+        return label_map
+    return np.where(np.isin(label_map, edgeless), 0, label_map).astype(np.int32)
 
 
 def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:

@@ -32,8 +32,8 @@ from motionbits.graph import (
     twist_edge_weights,
 )
 from motionbits.identity import identify_clusters
-from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, hide_small,
-                              remove_specks, snap_to_edges)
+from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, hide_edgeless,
+                              hide_small, remove_specks, snap_to_edges)
 from motionbits.merging import MotionBitGroups, observe_touching, seen_still, standing_still
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
@@ -441,6 +441,9 @@ class MotionBitsSegmenter:
             # ... and is shown if it still covers MIN_SHOWN_CELLS grid cells (smaller
             # ones are flow noise, or a sliver of smeared flow that the edges trimmed)
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
+            # ... and if its outline is an image edge (a mask left on a flat table looks
+            # like the table around it)
+            shown = hide_edgeless(shown, gradient)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

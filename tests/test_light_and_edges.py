@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from motionbits import MotionBitsConfig, segment_video
-from motionbits.evidence import static_residual
+from motionbits.evidence import gradient_magnitude, static_residual
 from motionbits.flow import DISFlow, normalize_contrast
-from motionbits.masks import snap_to_edges
+from motionbits.masks import hide_edgeless, snap_to_edges
 from motionbits.retirement import SHADOW_AGE, retire_shadows
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -222,3 +222,24 @@ def test_snap_trims_a_halo_on_a_flat_background_and_adds_nothing():
     assert (got & body).sum() / (got | body).sum() > 0.97
     assert got[100:110, 280:295].all()  # the thin arm keeps its pixels
     assert (snap_to_edges(labels, frame, band=0) == labels).all()
+
+
+def test_edgeless_masks_are_hidden_bodies_kept():
+    """A mask on a flat table that looks like the table around it is hidden; a body's
+    mask, whose outline is an image edge, is kept -- also a mask one side of which runs
+    along an edge only."""
+    rng = np.random.default_rng(0)
+    gray = np.full((120, 160), 200, np.float32) + rng.normal(0, 1.5, (120, 160)).astype(np.float32)
+    gray[20:60, 20:60] = 90  # a flat dark body on the flat table
+    gray[70:110, 100:150] -= 25 * (np.arange(50) / 50)[None, :]  # a soft shadow: a gentle ramp
+    labels = np.zeros((120, 160), np.int32)
+    labels[20:60, 20:60] = 1  # the body
+    labels[75:105, 105:140] = 2  # inside the shadow's ramp
+    labels[20:60, 60:75] = 3  # a strip right of the body: an edge along one side of it
+    labels[5:15, 100:120] = 4  # flat table
+    out = hide_edgeless(labels, gradient_magnitude(gray))
+    assert set(np.unique(out)) == {0, 1, 3}
+    assert (out[labels == 1] == 1).all() and (out[labels == 3] == 3).all()
+    none = labels.copy()
+    none[labels > 1] = 0
+    assert hide_edgeless(none, gradient_magnitude(gray)) is none
