@@ -13,13 +13,15 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.aperture import flat_regions
 from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "hide_small",
-           "hide_edgeless", "snap_to_edges", "SPECK_CELLS", "EDGELESS_GRADIENT"]
+           "hide_edgeless", "snap_to_edges", "trim_flat_background", "SPECK_CELLS",
+           "EDGELESS_GRADIENT", "BACKGROUND_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -36,6 +38,9 @@ SPECK_CELLS = 2
 EDGELESS_GRADIENT = 3.0
 OUTLINE_QUANTILE = 0.9
 OUTLINE_BAND = 3
+#: A flat image region (no edge inside) that lies outside every mask but for this share
+#: of its pixels is background: the masks' pixels in it are a halo.
+BACKGROUND_SHARE = 0.98
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,
@@ -240,6 +245,35 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     if not len(small):
         return label_map
     return np.where(np.isin(label_map, small), 0, label_map).astype(np.int32)
+
+
+def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
+    """Give back to the background the mask pixels that lie in a flat region of the image
+    that is all but ``BACKGROUND_SHARE`` background.
+
+    A mask that overhangs its body onto a flat table (smeared flow, a soft shadow that
+    moves with the body) crosses no image edge: the overhang and the table around it are
+    one flat region (:func:`motionbits.aperture.flat_regions`: colour gradient under
+    ``FLAT_GRADIENT``), almost all of it outside the masks. A body's own flat faces are
+    closed by its edges, and mostly inside its mask.
+
+    Args:
+        label_map: (H, W) int32 labels (0 = background).
+        rgb: (H, W, 3) uint8 frame at the same size.
+
+    Returns:
+        (H, W) int32 label map, each mask a subset of its mask in ``label_map``.
+    """
+    if not label_map.any():
+        return label_map
+    _, regions, stats = flat_regions(rgb)
+    area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
+    background = np.bincount(regions[label_map == 0], minlength=len(stats)) / area
+    halo = background >= BACKGROUND_SHARE
+    halo[0] = False  # not a region: the pixels that are not flat
+    if not halo.any():
+        return label_map
+    return np.where(halo[regions], 0, label_map).astype(np.int32)
 
 
 def hide_edgeless(label_map: np.ndarray, gradient: np.ndarray) -> np.ndarray:

@@ -33,7 +33,8 @@ from motionbits.graph import (
 )
 from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, hide_edgeless,
-                              hide_small, remove_specks, snap_to_edges)
+                              hide_small, remove_specks, snap_to_edges,
+                              trim_flat_background)
 from motionbits.merging import MotionBitGroups, observe_touching, seen_still, standing_still
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
@@ -438,6 +439,7 @@ class MotionBitsSegmenter:
             self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
+            shown = trim_flat_background(shown, cur)  # overhangs onto flat background
             # ... and is shown if it still covers MIN_SHOWN_CELLS grid cells (smaller
             # ones are flow noise, or a sliver of smeared flow that the edges trimmed)
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])

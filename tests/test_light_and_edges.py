@@ -8,7 +8,7 @@ import pytest
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import gradient_magnitude, static_residual
 from motionbits.flow import DISFlow, normalize_contrast
-from motionbits.masks import hide_edgeless, snap_to_edges
+from motionbits.masks import hide_edgeless, snap_to_edges, trim_flat_background
 from motionbits.retirement import SHADOW_AGE, retire_shadows
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -243,3 +243,26 @@ def test_edgeless_masks_are_hidden_bodies_kept():
     none = labels.copy()
     none[labels > 1] = 0
     assert hide_edgeless(none, gradient_magnitude(gray)) is none
+
+
+def test_overhangs_onto_a_flat_table_are_trimmed_bodies_kept():
+    """A mask that spills across no edge onto a flat table (a soft shadow, smeared flow)
+    loses the spill; the body's flat faces, closed by its edges, stay whole -- also the
+    part of a body whose mask covers only some of it."""
+    rgb = np.full((240, 320, 3), (225, 225, 220), np.float32)  # a flat white table
+    # a soft shadow below where the red body stands: no edge anywhere
+    yy, xx = np.mgrid[:240, :320]
+    rgb *= (1 - 0.2 * np.exp(-((yy - 80) ** 2 + (xx - 50) ** 2) / (2 * 15.0 ** 2)))[..., None]
+    rgb = rgb.astype(np.uint8)
+    rgb[30:70, 30:70] = (200, 40, 40)  # a flat red body
+    rgb[30:70, 90:130] = (40, 40, 200)  # a flat blue body
+    labels = np.zeros((240, 320), np.int32)
+    labels[30:80, 25:75] = 1  # the red body and the shadow's spill below and left of it
+    labels[30:50, 90:130] = 2  # half of the blue body
+    out = trim_flat_background(labels, rgb)
+    assert (out[30:70, 30:70] == 1).all()
+    # the spill (but for the body's edge pixels, which are no flat region)
+    assert not (out[74:80] > 0).any() and not (out[:, 25:28] > 0).any()
+    assert (out[labels == 2] == 2).all()  # the blue body's region is half in its mask
+    nothing = np.zeros_like(labels)
+    assert trim_flat_background(nothing, rgb) is nothing
