@@ -173,6 +173,9 @@ class CameraMotion(NamedTuple):
     #: (n,) bool nodes whose motion left by the homography lies along their epipolar line
     #: (within the threshold), as the static world's parallax would; None: no parallax.
     epipolar: np.ndarray | None = None
+    #: (H, W, 2) float32, where each pixel of the static world was in the previous frame
+    #: (the homography and its parallax, :func:`world_maps`); None: no camera motion.
+    world: np.ndarray | None = None
 
 
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
@@ -208,10 +211,11 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     Returns:
         :class:`CameraMotion`: the backward flow (H, W, 2), the previous frame and the
         nodes' backward targets (n, 2) relative to the static world (homography and
-        parallax; 0 flow where the view just entered), the camera's 3x3 homography and,
-        where parallax is found, the nodes whose residual motion lies along their
-        epipolar lines -- ``flow_back``, ``prev``, ``back_points``, None, None (the same
-        objects) when no camera motion is found.
+        parallax; 0 flow where the view just entered), the camera's 3x3 homography,
+        where parallax is found the nodes whose residual motion lies along their epipolar
+        lines, and the static world's (H, W, 2) map to the previous frame --
+        ``flow_back``, ``prev``, ``back_points``, None, None, None (the same objects) when
+        no camera motion is found.
     """
     if support >= 1.0:
         return CameraMotion(flow_back, prev, back_points, None)
@@ -262,4 +266,4 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
                | (maps[..., 1] > ht - 1))
     flow_m[entered] = 0.0
     return CameraMotion(flow_m, prev_m, points + sample_bilinear(flow_m, points), cam,
-                        epipolar)
+                        epipolar, maps)

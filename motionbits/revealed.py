@@ -12,11 +12,15 @@ background (:meth:`StaticMemory.observe`), which "nothing moved" explains. The p
 body the hand covers and then lifts by a few pixels looks as it did at rest, and loses
 those pixels (README, "Background seen again").
 
-The memory holds only while the camera stands still (a moving camera clears it: the
-stabilised frames would have to carry it, which they do not yet). A body that stood still
-at first and moves away reveals what it hid, which the memory never saw: nothing changes
-there. A body that comes to rest is remembered as it is once it is seen still, so a
-stopped body is never "revealed" away.
+Under a moving camera the memory follows the static world: each frame it is warped by
+the camera's model of the static world (homography and parallax, ``CameraMotion.world``)
+before it is compared, so the table an arm or its passing shadow has just uncovered is
+"nothing moved" there too (births on static surfaces whose look changed were the largest
+share of the moving camera's static false positives). The cast-shadow test
+(:meth:`StaticMemory.shadowed`) is left to a still camera (measured: README, "Moving
+cameras"). A body that stood still at first and moves away reveals what it hid, which
+the memory never saw: nothing changes there. A body that comes to rest is remembered as
+it is once it is seen still, so a stopped body is never "revealed" away.
 """
 
 from __future__ import annotations
@@ -37,6 +41,9 @@ SHADOW_GAIN = (0.2, 0.85)
 SHADOW_WINDOW = 9
 #: Remembered pixels darker than this sum of the three channels have no reliable colour.
 SHADOW_MIN_SUM = 60
+#: Under a moving camera a pixel stays known where the bilinear weights of the known
+#: pixels its memory is read from exceed this (all four; float rounding aside).
+KNOWN_WEIGHT = 0.999
 
 
 def _color_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -69,9 +76,10 @@ class StaticMemory:
         self.known = np.zeros(shape, bool)  # seen standing still at some frame
         self.was_covered = np.zeros(shape, bool)  # looked otherwise since
         self._difference: np.ndarray | None = None  # this frame's, from observe()
+        self._camera_moved = False  # this frame's, from observe()
 
     def observe(self, cur: np.ndarray, cur_gray: np.ndarray, still: np.ndarray,
-                camera_moved: bool) -> np.ndarray | None:
+                world: np.ndarray | None = None) -> np.ndarray | None:
         """Compare the current frame with the memory; where it is revealed, lower the
         residual of "nothing moved" to the one against the remembered grey level.
 
@@ -80,25 +88,45 @@ class StaticMemory:
             cur_gray: (H, W) float32 current grey frame.
             still: (H, W) float32 grey levels by which "nothing moved" misses each pixel,
                 lowered in place where revealed.
-            camera_moved: the camera moved between the last frame and this one: the
-                memory is cleared.
+            world: where the camera moved between the last frame and this one, (H, W, 2)
+                float32 where each pixel of the static world was in the last frame
+                (``CameraMotion.world``): the memory follows it first (:meth:`follow`);
+                None: a still camera.
 
         Returns:
             (H, W) bool, pixels covered since they were last seen still that look as they
-            did then; None when the memory does not hold (camera moving, or off).
+            did then; None when the memory is off.
         """
         self._difference = None
-        if camera_moved:
-            self.known[:] = False
-            self.was_covered[:] = False
-        if camera_moved or self.tolerance <= 0:
+        self._camera_moved = world is not None
+        if self.tolerance <= 0:
             return None
+        if world is not None:
+            self.follow(world)
         self._difference = _color_difference(cur, self.color)
         revealed = self.known & self.was_covered & (self._difference < self.tolerance)
         # cv2.copyTo writes into ``still`` (np.copyto with ``where`` is ~20x slower)
         cv2.copyTo(np.minimum(still, cv2.absdiff(cur_gray, self.gray)), revealed.view(np.uint8),
                    still)
         return revealed
+
+    def follow(self, world: np.ndarray) -> None:
+        """Carry the memory to the current frame of a moving camera: each pixel takes
+        what was remembered where its static world was in the last frame (``world``,
+        (H, W, 2) float32, :func:`motionbits.camera.world_maps`), bilinearly. A pixel is
+        known only where all four pixels it is read from are (no colour is mixed with an
+        unknown one), was covered where most of them were; what has just come into view
+        is unknown."""
+        known = cv2.remap(self.known.astype(np.float32), world, None, cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+        covered = cv2.remap(self.was_covered.astype(np.float32), world, None,
+                            cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+        self.color = cv2.remap(self.color, world, None, cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_REPLICATE)
+        self.gray = cv2.remap(self.gray, world, None, cv2.INTER_LINEAR,
+                              borderMode=cv2.BORDER_REPLICATE)
+        self.known = known > KNOWN_WEIGHT
+        self.was_covered = covered > 0.5
 
     def shadowed(self, cur: np.ndarray, box: tuple[slice, slice]) -> np.ndarray | None:
         """Where the image box ``box`` shows the remembered static world under a shadow:
@@ -114,9 +142,11 @@ class StaticMemory:
 
         Returns:
             (h, w) bool on the box; None when the memory does not hold (:meth:`observe`
-            returned None).
+            returned None) or the camera moved (under a moving camera, retiring shadows
+            lowered the static false positives further but took bodies with them:
+            README, "Moving cameras").
         """
-        if self._difference is None:
+        if self._difference is None or self._camera_moved:
             return None
         # grown by the windows' reach, so that the answer is the whole image's, cropped
         h, w = self.known.shape

@@ -305,7 +305,7 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow
-            flow_m, prev_m, back_pts, cam, epipolar = compensate_camera(
+            flow_m, prev_m, back_pts, cam, epipolar, world = compensate_camera(
                 pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
                 threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
                 parallax=cfg.camera_parallax, grid_shape=(grid.rows, grid.cols),
@@ -353,7 +353,8 @@ class MotionBitsSegmenter:
             still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
                      if cfg.relight_sigma else np.abs(cur_g - prev_g))
             # ... and where it shows the static world seen again after a body uncovered it
-            revealed = self._memory.observe(cur, cur_g, still, cam is not None)
+            # (under a moving camera the memory follows the static world's model first)
+            revealed = self._memory.observe(cur, cur_g, still, world)
             # births only (computed once, if a cluster asks); under a moving camera a birth
             # must beat the static world's model given its error, and a node whose motion
             # lies along its epipolar line (as parallax would) is no evidence of its own

@@ -40,10 +40,15 @@ def test_compensate_camera_recovers_a_shift_and_ignores_identity():
     kw = dict(support=0.5, threshold=1.0, min_shift=0.25)
     still = compensate_camera(p, p + 0.05, ok, flow, prev, **kw)
     assert still[3] is None and still[0] is flow and still[1] is prev  # static: untouched
+    assert still.world is None
     q = p + shift
     q[:40] += 6.0  # a moving body, 10% of the nodes
-    flow_m, prev_m, back_m, cam, epipolar = compensate_camera(p, q, ok, flow, prev, **kw)
+    flow_m, prev_m, back_m, cam, epipolar, world = compensate_camera(p, q, ok, flow, prev,
+                                                                     **kw)
     assert cam is not None and np.allclose(cam[:2, 2], shift, atol=0.05)
+    # where each pixel of the static world was in the previous frame
+    ys, xs = np.mgrid[:h, :w].astype(np.float32)
+    assert np.abs(world - np.stack([xs, ys], -1) - shift).max() < 0.05
     assert np.abs(flow_m).max() < 0.05  # the camera's motion is gone everywhere
     assert np.abs(back_m[40:] - p[40:]).max() < 0.05
     # the stabilised previous frame is prev(p + shift)

@@ -119,7 +119,7 @@ def _remembered(base: np.ndarray) -> StaticMemory:
     """A static memory that saw ``base`` standing still."""
     memory = StaticMemory(SIZE, tolerance=10.0, covered=20.0)
     gray = _gray(base)
-    memory.observe(base, gray, np.zeros(SIZE, np.float32), camera_moved=False)
+    memory.observe(base, gray, np.zeros(SIZE, np.float32))
     memory.update(base, gray, gray, np.ones(SIZE, bool))
     return memory
 
@@ -140,7 +140,7 @@ def _observing_shadow_and_body() -> tuple[StaticMemory, np.ndarray]:
     memory = _remembered(base)
     cur = _shadow_and_body(base)
     gray = _gray(cur)
-    memory.observe(cur, gray, np.abs(gray - _gray(base)), camera_moved=False)
+    memory.observe(cur, gray, np.abs(gray - _gray(base)))
     return memory, cur
 
 
@@ -157,8 +157,9 @@ def test_memory_sees_a_cast_shadow_not_a_body():
     # a box of the image: the same answer there
     box = (slice(90, 170), slice(60, 260))
     np.testing.assert_array_equal(memory.shadowed(cur, box), shadow[box])
-    # no memory under a moving camera
-    memory.observe(cur, _gray(cur), np.zeros(SIZE, np.float32), camera_moved=True)
+    # no shadow test under a moving camera
+    ys, xs = np.mgrid[:SIZE[0], :SIZE[1]].astype(np.float32)
+    memory.observe(cur, _gray(cur), np.zeros(SIZE, np.float32), np.stack([xs, ys], -1))
     assert memory.shadowed(cur, box) is None
 
 

@@ -160,10 +160,10 @@ def test_static_memory_reveals_background_seen_again_after_it_was_covered():
     memory = StaticMemory(table.shape[:2], tolerance=10.0, covered=20.0)
     everywhere = np.ones(table.shape[:2], bool)
 
-    def step(cur, prev, standing=everywhere, camera_moved=False):
+    def step(cur, prev, standing=everywhere):
         gray = [f.mean(axis=2, dtype=np.float32) for f in (cur, prev)]
         residual = np.abs(gray[0] - gray[1])  # "nothing moved" against the last frame
-        revealed = memory.observe(cur, gray[0], residual, camera_moved)
+        revealed = memory.observe(cur, gray[0], residual)
         if revealed is not None:  # lowered to the residual against the memory there
             assert (residual[revealed] < 1e-3).all()
             assert (residual[~revealed] == np.abs(gray[0] - gray[1])[~revealed]).all()
@@ -186,11 +186,43 @@ def test_static_memory_reveals_background_seen_again_after_it_was_covered():
     # seen still again, the pixel is remembered anew and is no longer "revealed"
     step(back, back)
     assert not step(back, back).any()
-    # a moving camera clears the memory; switched off, nothing is revealed
-    assert step(arm, back, camera_moved=True) is None
-    assert not memory.known.any()
+    # switched off, nothing is revealed
     off = StaticMemory(table.shape[:2], tolerance=0.0, covered=20.0)
-    assert off.observe(table, table.mean(axis=2), everywhere * 1.0, camera_moved=False) is None
+    assert off.observe(table, table.mean(axis=2), everywhere * 1.0) is None
+
+
+def test_static_memory_follows_a_moving_camera():
+    """The camera pans 3 px to the left while an arm uncovers the table: the table is seen
+    again 3 px further right in the image, and revealed there; what just came into view
+    is not known."""
+    rng = np.random.default_rng(1)
+    world = rng.integers(0, 256, (40, 70, 3), dtype=np.uint8)  # the table, wider than the view
+    view = [world[:, 5:65], world[:, 2:62]]  # the camera pans: the table moves 3 px right
+    memory = StaticMemory(view[0].shape[:2], tolerance=10.0, covered=20.0)
+    everywhere = np.ones(view[0].shape[:2], bool)
+    ys, xs = np.mgrid[:40, :60].astype(np.float32)
+    pan = np.stack([xs - 3.0, ys], -1)  # where each pixel's static world was at the last frame
+
+    def step(cur, prev, standing=everywhere, world=None):
+        gray = [f.mean(axis=2, dtype=np.float32) for f in (cur, prev)]
+        residual = np.abs(gray[0] - gray[1])
+        revealed = memory.observe(cur, gray[0], residual, world)
+        memory.update(cur, *gray, standing)
+        return revealed
+
+    step(view[0], view[0])  # seen standing still
+    arm = view[0].copy()
+    arm[10:30, 10:40] = 30  # a flat dark arm covers the middle
+    moving = everywhere.copy()
+    moving[10:30, 10:40] = False
+    step(arm, view[0], moving)
+    revealed = step(view[1], arm, moving, world=pan)  # the arm leaves as the camera pans
+    assert revealed[13:27, 16:40].all()  # the uncovered table, 3 px to the right
+    assert not revealed[:8].any()  # never covered
+    assert not memory.known[:, :3].any()  # just came into view
+    assert memory.known[:, 3:].all()
+    # the cast-shadow test is left to a still camera
+    assert memory.shadowed(view[1], (slice(0, 40), slice(0, 60))) is None
 
 
 def test_hide_small_zeroes_whole_labels_under_the_area():

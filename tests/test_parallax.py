@@ -66,7 +66,7 @@ def test_parallax_field_keeps_aligned_residual_and_interpolates_the_rest():
 def test_compensation_removes_the_background_parallax_but_not_the_moving_body():
     flow, band, body = _world(0.06, np.array([0.0, 4.0]))
     off = _compensate(flow, parallax=1.0)[0]  # homography only
-    on, _, _, cam, _ = _compensate(flow, parallax=0.1)
+    on, _, _, cam, _, _ = _compensate(flow, parallax=0.1)
     assert cam is not None
     inner = band.copy()
     inner[:, :6] = inner[:, -6:] = inner[:4] = False  # away from the edges
