@@ -54,12 +54,14 @@ REACH = 4
 KEPT_SHARE = 0.5
 
 
-def flat_regions(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Connected regions of flat colour, found at half resolution (4x cheaper; a link is
     wider than a few px).
 
     Args:
         rgb: (H, W, 3) uint8 frame.
+        max_gradient: grey levels per px (largest over R, G, B) under which a pixel is flat.
 
     Returns:
         (flat, regions, stats): (H, W) bool flat pixels, (H, W) int32 region of each pixel
@@ -76,7 +78,7 @@ def flat_regions(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     # the largest over R, G, B (cv2.max: numpy's max along the last axis is 20x slower)
     grad = cv2.max(cv2.max(grad[..., 0], grad[..., 1]), grad[..., 2])
     # a 3x3 Sobel reads 8x the grey levels per px of a ramp; one px here is two of the frame
-    flat = grad < 8 * 2 * FLAT_GRADIENT
+    flat = grad < 8 * 2 * max_gradient
     _, regions, stats = cv2.connectedComponentsWithStats(flat.astype(np.uint8),
                                                          connectivity=4)[:3]
     regions = cv2.resize(regions, (w, h), interpolation=cv2.INTER_NEAREST)

@@ -21,7 +21,7 @@ from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "hide_small",
            "hide_edgeless", "snap_to_edges", "trim_flat_background", "SPECK_CELLS",
-           "EDGELESS_GRADIENT", "BACKGROUND_SHARE"]
+           "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT", "BACKGROUND_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -38,8 +38,11 @@ SPECK_CELLS = 2
 EDGELESS_GRADIENT = 3.0
 OUTLINE_QUANTILE = 0.9
 OUTLINE_BAND = 3
-#: A flat image region (no edge inside) that lies outside every mask but for this share
-#: of its pixels is background: the masks' pixels in it are a halo.
+#: A flat image region -- colour gradient under ``HALO_FLAT_GRADIENT`` grey levels per px,
+#: half :data:`motionbits.aperture.FLAT_GRADIENT`: a body of the table's own material
+#: joins the table's region through its weaker edges at 6 -- that lies outside every
+#: mask but for this share of its pixels is background: the masks' pixels in it are a halo.
+HALO_FLAT_GRADIENT = 3.0
 BACKGROUND_SHARE = 0.98
 
 
@@ -254,7 +257,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     A mask that overhangs its body onto a flat table (smeared flow, a soft shadow that
     moves with the body) crosses no image edge: the overhang and the table around it are
     one flat region (:func:`motionbits.aperture.flat_regions`: colour gradient under
-    ``FLAT_GRADIENT``), almost all of it outside the masks. A body's own flat faces are
+    ``HALO_FLAT_GRADIENT``), almost all of it outside the masks. A body's own flat faces are
     closed by its edges, and mostly inside its mask.
 
     Args:
@@ -266,7 +269,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     """
     if not label_map.any():
         return label_map
-    _, regions, stats = flat_regions(rgb)
+    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     background = np.bincount(regions[label_map == 0], minlength=len(stats)) / area
     halo = background >= BACKGROUND_SHARE
