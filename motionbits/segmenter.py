@@ -441,12 +441,11 @@ class MotionBitsSegmenter:
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
             shown = trim_flat_background(shown, cur)  # overhangs onto flat background
-            # ... and is shown if it still covers MIN_SHOWN_CELLS grid cells (smaller
-            # ones are flow noise, or a sliver of smeared flow that the edges trimmed)
-            shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
-            # ... and if its outline is an image edge (a mask left on a flat table looks
-            # like the table around it)
-            shown = hide_edgeless(shown, gradient)
+            # a trimmed mask is shown if it still covers MIN_SHOWN_CELLS grid cells
+            # (smaller ones are flow noise, or a sliver of smeared flow) and its outline
+            # is an image edge (a mask left on a flat table looks like the table around it)
+            shown = hide_edgeless(hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1]),
+                                  gradient)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
