@@ -40,10 +40,10 @@ OUTLINE_QUANTILE = 0.9
 OUTLINE_BAND = 3
 #: A flat image region -- colour gradient under ``HALO_FLAT_GRADIENT`` grey levels per px,
 #: half :data:`motionbits.aperture.FLAT_GRADIENT`: a body of the table's own material
-#: joins the table's region through its weaker edges at 6 -- that lies outside every
-#: mask but for this share of its pixels is background: the masks' pixels in it are a halo.
+#: joins the table's region through its weaker edges at 6 -- of which at least this share
+#: is background: the masks' pixels in it are a halo.
 HALO_FLAT_GRADIENT = 3.0
-BACKGROUND_SHARE = 0.98
+BACKGROUND_SHARE = 0.8
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,
@@ -252,12 +252,12 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
 
 def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     """Give back to the background the mask pixels that lie in a flat region of the image
-    that is all but ``BACKGROUND_SHARE`` background.
+    of which at least ``BACKGROUND_SHARE`` is background.
 
     A mask that overhangs its body onto a flat table (smeared flow, a soft shadow that
     moves with the body) crosses no image edge: the overhang and the table around it are
     one flat region (:func:`motionbits.aperture.flat_regions`: colour gradient under
-    ``HALO_FLAT_GRADIENT``), almost all of it outside the masks. A body's own flat faces are
+    ``HALO_FLAT_GRADIENT``), most of it outside the masks. A body's own flat faces are
     closed by its edges, and mostly inside its mask.
 
     Args:
