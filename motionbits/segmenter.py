@@ -440,12 +440,12 @@ class MotionBitsSegmenter:
             self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
-            shown = trim_flat_background(shown, cur)  # overhangs onto flat background
-            # a trimmed mask is shown if it still covers MIN_SHOWN_CELLS grid cells
-            # (smaller ones are flow noise, or a sliver of smeared flow) and its outline
-            # is an image edge (a mask left on a flat table looks like the table around it)
-            shown = hide_edgeless(hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1]),
-                                  gradient)
+            # a mask is shown if its outline is an image edge (a mask left on a flat table
+            # looks like the table around it) and, once its overhangs onto flat background
+            # are trimmed, it still covers MIN_SHOWN_CELLS grid cells (smaller ones are
+            # flow noise, or a sliver of smeared flow)
+            shown = trim_flat_background(hide_edgeless(shown, gradient), cur)
+            shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
