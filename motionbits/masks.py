@@ -19,7 +19,8 @@ from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
-__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "hide_small",
+__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "drop_labels",
+           "hide_small",
            "hide_edgeless", "snap_to_edges", "trim_flat_background", "SPECK_CELLS",
            "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT", "BACKGROUND_SHARE"]
 
@@ -229,6 +230,14 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
     return out
 
 
+def drop_labels(label_map: np.ndarray, ids: np.ndarray | list[int]) -> np.ndarray:
+    """``label_map`` (H, W) int32 with the labels ``ids`` zeroed (itself if ``ids`` is
+    empty)."""
+    if not len(ids):
+        return label_map
+    return np.where(np.isin(label_map, ids), 0, label_map).astype(np.int32)
+
+
 def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     """Zero every label whose whole mask covers fewer than ``min_area`` px.
 
@@ -244,10 +253,7 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     """
     area = np.bincount(label_map.ravel())
     small = np.flatnonzero(area[1:] < min_area) + 1
-    small = small[area[small] > 0]
-    if not len(small):
-        return label_map
-    return np.where(np.isin(label_map, small), 0, label_map).astype(np.int32)
+    return drop_labels(label_map, small[area[small] > 0])
 
 
 def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
@@ -310,9 +316,7 @@ def hide_edgeless(label_map: np.ndarray, gradient: np.ndarray) -> np.ndarray:
         outline = (cv2.dilate(mask, disk) > 0) & (cv2.erode(mask, disk) == 0)
         if np.quantile(gradient[grown][outline], OUTLINE_QUANTILE) < EDGELESS_GRADIENT:
             edgeless.append(i + 1)
-    if not edgeless:
-        return label_map
-    return np.where(np.isin(label_map, edgeless), 0, label_map).astype(np.int32)
+    return drop_labels(label_map, edgeless)
 
 
 def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:

@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 
 from motionbits.boxes import label_boxes
+from motionbits.masks import drop_labels
 from motionbits.revealed import StaticMemory
 from motionbits.twists import rigid_matrix
 
@@ -215,4 +216,4 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     area = np.bincount(lab.ravel())
     dark = np.bincount(lab[shadow], minlength=len(area))
     gone = [i for i in young if dark[i] > SHADOW_SHARE * area[i]]
-    return labels if not gone else np.where(np.isin(labels, gone), 0, labels)
+    return drop_labels(labels, gone)
