@@ -58,6 +58,7 @@ _RANGES = {
     "flow_texture": "(0, inf)",
     "pixel_evidence": "[0, inf)",
     "edge_band": "[0, inf)",
+    "colour_band": "[0, inf)",
     "relight_sigma": "[0, inf)",
     "reveal_tolerance": "[0, inf)",
     "reveal_covered": "(0, inf)",
@@ -189,6 +190,10 @@ class MotionBitsConfig:
     # ours (masks.snap_to_edges): each shown mask is trimmed back to the strongest image
     # edge within this many grid cells of its outline (0 = off; the state is not trimmed)
     edge_band: float = 1.0
+    # ours (colours.snap_to_colours): within this many grid cells of its outline, a shown
+    # mask takes the pixels coloured like its inside and gives back those coloured like
+    # the background around it (0 = off; the state keeps the motion's masks)
+    colour_band: float = 1.25
     match_iou: float = 0.2  # a cluster inherits an id above this IoU with its old mask
     # ours (motionbits/merging.py): touching MotionBits are one body when one affine motion
     # explains the images of both within merge_agree grey levels of their own motions (at

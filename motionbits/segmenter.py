@@ -17,6 +17,7 @@ from threadpoolctl import ThreadpoolController
 from motionbits.aperture import join_flat_regions
 from motionbits.backend import make_ops
 from motionbits.camera import compensate_camera
+from motionbits.colours import snap_to_colours
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
     appearance_consistent, forgive_misalignment, gradient_magnitude, motion_gain, pull_back,
@@ -443,8 +444,10 @@ class MotionBitsSegmenter:
             # a mask is shown if its outline is an image edge (a mask left on a flat table
             # looks like the table around it) and, once its overhangs onto flat background
             # are trimmed, it still covers MIN_SHOWN_CELLS grid cells (smaller ones are
-            # flow noise, or a sliver of smeared flow)
+            # flow noise, or a sliver of smeared flow); its outline goes where its colours
+            # end (flow is smooth across a moving body's outline)
             shown = trim_flat_background(hide_edgeless(shown, gradient), cur)
+            shown = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)

@@ -1,0 +1,86 @@
+"""Mask outlines moved to where the colours of a body and of its surroundings part.
+
+Flow is smooth across motion boundaries (DIS matches patches; a patch that straddles a
+moving body's outline takes the body's motion), so a motion mask overhangs its body by a
+few pixels on one side and falls short on another. The colours settle it: within a band
+around each mask's outline, a pixel goes to the mask if its colour is more frequent on the
+mask's inside than in the background just outside (local colour histograms, as GrabCut's
+colour models without its graph cut).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motionbits.boxes import label_boxes
+
+__all__ = ["snap_to_colours", "COLOUR_BINS", "COLOUR_SMOOTH", "MIN_COLOUR_SAMPLES"]
+
+#: Bins per RGB channel of the colour histograms (16: 4096 colours).
+COLOUR_BINS = 16
+#: px: side of the box filter that smooths the colour probability before it decides.
+COLOUR_SMOOTH = 5
+#: px: a mask whose inside (or background ring) has fewer is left as it is.
+MIN_COLOUR_SAMPLES = 20
+
+
+def colour_codes(rgb: np.ndarray, bins: int = COLOUR_BINS) -> np.ndarray:
+    """(H, W, 3) uint8 -> (H, W) int32 histogram bin of each pixel's colour."""
+    q = (rgb // (256 // bins)).astype(np.int32)
+    return (q[..., 0] * bins + q[..., 1]) * bins + q[..., 2]
+
+
+def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:
+    """Move each mask's outline, within ``band`` px of where it is, to where its colours
+    end.
+
+    For each mask: the colour histogram of its inside (the mask eroded by ``band``) and
+    of the background in the ring from
+    ``band`` to ``2 * band`` px outside it. A pixel within ``band`` px of the outline
+    belongs to the mask where its colour's share of the inside is larger than its share
+    of the ring (the ratio smoothed over ``COLOUR_SMOOTH`` px). A mask gives pixels only to
+    the background and takes them only from it: where two masks meet, the motion decides.
+    A mask whose inside or ring has fewer than ``MIN_COLOUR_SAMPLES`` pixels is left as it
+    is (thinner than ``2 * band``, all of it is outline: its colours could not be told
+    from its overhangs', and a speck would grow by the band all round).
+
+    Args:
+        label_map: (H, W) int32 labels (0 = background).
+        rgb: (H, W, 3) uint8 frame at the same size.
+        band: px (0 = return ``label_map`` unchanged).
+
+    Returns:
+        (H, W) int32 label map.
+    """
+    if band < 1 or not label_map.any():
+        return label_map
+    h, w = label_map.shape
+    codes = colour_codes(rgb)
+    near = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * band + 1,) * 2)
+    ring = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (4 * band + 1,) * 2)
+    reach = 2 * band + 2
+    out = label_map.copy()
+    n_bins = COLOUR_BINS ** 3
+    for i, box in enumerate(label_boxes(label_map)):
+        if box is None:
+            continue
+        rows = slice(max(box[0].start - reach, 0), min(box[0].stop + reach, h))
+        cols = slice(max(box[1].start - reach, 0), min(box[1].stop + reach, w))
+        labels, code = label_map[rows, cols], codes[rows, cols]
+        mask = (labels == i + 1).astype(np.uint8)
+        inner = cv2.erode(mask, near) > 0
+        outer = cv2.dilate(mask, near) > 0
+        around = (cv2.dilate(mask, ring) > 0) & ~outer & (labels == 0)
+        inside, outside = code[inner], code[around]
+        if len(outside) < MIN_COLOUR_SAMPLES or len(inside) < MIN_COLOUR_SAMPLES:
+            continue
+        p_in = np.bincount(inside, minlength=n_bins)[code] / np.float32(len(inside))
+        p_out = np.bincount(outside, minlength=n_bins)[code] / np.float32(len(outside))
+        share = (p_in + 1e-4) / (p_in + p_out + 2e-4)
+        mine = cv2.blur(share.astype(np.float32), (COLOUR_SMOOTH, COLOUR_SMOOTH)) > 0.5
+        band_px = outer & ~inner
+        sub = out[rows, cols]
+        sub[band_px & (sub == i + 1) & ~mine] = 0
+        sub[band_px & mine & (labels == 0)] = i + 1
+    return out
