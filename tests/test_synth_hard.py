@@ -209,5 +209,11 @@ def test_stored_flow_backend_and_oracle_method(tiny_pickplace):
     assert "pickplace-shake" in results["oracle"]["tracks"]
     with pytest.raises(ValueError, match="needs the scene folder"):
         make_method("motionbits-oracle-flow")(frames)
+    # --option values arrive as strings: converted and checked as for ``motionbits``
+    oracle = make_method("motionbits-oracle-flow", merge_agree="0", camera_reflow="true")
+    assert oracle.config.merge_agree == 0.0 and oracle.config.camera_reflow is True
+    assert make_method("motionbits-oracle-flow").config.camera_reflow is False
+    with pytest.raises(ValueError, match="unknown MotionBitsConfig field"):
+        make_method("motionbits-oracle-flow", no_such_field="1")
     with pytest.raises(FileNotFoundError, match="--flow"):
         load_flow_pair(tiny_pickplace.parent, 1)

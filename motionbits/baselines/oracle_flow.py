@@ -101,7 +101,14 @@ class OracleFlowMotionBits:
     needs_scene = True
 
     def __init__(self, config=None, **changes) -> None:
-        self.config, self.changes = config, changes
+        from motionbits.baselines.motionbits_method import MotionBitsMethod
+
+        # the same conversion and checks as ``motionbits`` (``--option`` values are strings)
+        self.config = MotionBitsMethod(config, **changes).config
+        # the stored flow is exact between the clip's frames only: no second flow pass on
+        # camera-stabilised frames, unless asked for
+        if "camera_reflow" not in changes:
+            self.config = self.config.with_(camera_reflow=False)
 
     def __call__(self, frames: list[np.ndarray], scene: str | os.PathLike | None = None) -> np.ndarray:
         import motionbits
@@ -111,15 +118,9 @@ class OracleFlowMotionBits:
                              "its flow/; run it through motionbits benchmark")
         if len(frames) < 2:
             raise ValueError("a clip needs at least 2 frames")
-        config = self.config or motionbits.MotionBitsConfig()
-        if isinstance(config, dict):
-            config = motionbits.MotionBitsConfig(**config)
-        # the stored flow is exact between the clip's frames only: no second flow pass on
-        # camera-stabilised frames
-        config = config.with_(**{"camera_reflow": False, **self.changes})
         flow = StoredFlow(scene, frames)
         load_flow_pair(scene, 1)  # fail early, with the reason, if the scene has no flow
-        seg = motionbits.MotionBitsSegmenter(config, flow=flow)
+        seg = motionbits.MotionBitsSegmenter(self.config, flow=flow)
         result = None
         for k, frame in enumerate(frames):
             flow.frame = max(k, 1)
