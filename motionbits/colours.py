@@ -15,7 +15,8 @@ import numpy as np
 
 from motionbits.boxes import label_boxes
 
-__all__ = ["snap_to_colours", "COLOUR_BINS", "COLOUR_SMOOTH", "MIN_COLOUR_SAMPLES"]
+__all__ = ["snap_to_colours", "colour_codes", "COLOUR_BINS", "COLOUR_SMOOTH",
+           "MIN_COLOUR_SAMPLES", "MIN_KEPT"]
 
 #: Bins per RGB channel of the colour histograms (16: 4096 colours).
 COLOUR_BINS = 16
@@ -23,6 +24,8 @@ COLOUR_BINS = 16
 COLOUR_SMOOTH = 5
 #: px: a mask whose inside (or background ring) has fewer is left as it is.
 MIN_COLOUR_SAMPLES = 20
+#: A mask that would keep less than this share of its pixels is left as it is.
+MIN_KEPT = 0.5
 
 
 def colour_codes(rgb: np.ndarray, bins: int = COLOUR_BINS) -> np.ndarray:
@@ -82,7 +85,10 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
         share = (p_in + 1e-4) / (p_in + p_out + 2e-4)
         mine = cv2.blur(share.astype(np.float32), (COLOUR_SMOOTH, COLOUR_SMOOTH)) > 0.5
         band_px = outer & ~inner
+        lost = band_px & (mask > 0) & ~mine
+        if lost.sum() > (1 - MIN_KEPT) * mask.sum():
+            continue  # the colours do not tell this body from its surroundings
         sub = out[rows, cols]
-        sub[band_px & (sub == i + 1) & ~mine] = 0
+        sub[lost] = 0
         sub[band_px & mine & (labels == 0)] = i + 1
     return out

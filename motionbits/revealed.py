@@ -75,6 +75,7 @@ class StaticMemory:
         self.gray = np.zeros(shape, np.float32)  # remembered grey level
         self.known = np.zeros(shape, bool)  # seen standing still at some frame
         self.was_covered = np.zeros(shape, bool)  # looked otherwise since
+        self.label = np.zeros(shape, np.int32)  # MotionBit id when last seen still (0: none)
         self._difference: np.ndarray | None = None  # this frame's, from observe()
         self._camera_moved = False  # this frame's, from observe()
 
@@ -125,6 +126,8 @@ class StaticMemory:
                                borderMode=cv2.BORDER_REPLICATE)
         self.gray = cv2.remap(self.gray, world, None, cv2.INTER_LINEAR,
                               borderMode=cv2.BORDER_REPLICATE)
+        self.label = cv2.remap(self.label.astype(np.float32), world, None, cv2.INTER_NEAREST,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=0.0).astype(np.int32)
         self.known = known > KNOWN_WEIGHT
         self.was_covered = covered > 0.5
 
@@ -168,8 +171,33 @@ class StaticMemory:
                   & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
         return self.known[box] & shadow[inner]
 
+    def restore(self, labels: np.ndarray, revealed: np.ndarray | None
+                ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Give the revealed pixels that were last seen still inside a MotionBit (a body
+        that had stopped, then was covered by another passing in front of it or by its
+        shadow) that MotionBit's id again, where nothing else holds them.
+
+        Args:
+            labels: (H, W) int32 label map of this frame.
+            revealed: (H, W) bool from :meth:`observe` (None: the memory is off).
+
+        Returns:
+            The label map and the (H, W) bool pixels given back (None if none).
+        """
+        if revealed is None:
+            return labels, None
+        back = revealed & (labels == 0) & (self.label > 0)
+        if not back.any():
+            return labels, None
+        return np.where(back, self.label, labels).astype(np.int32), back
+
+    def forget(self, ids: set[int]) -> None:
+        """Retired MotionBits are not given back (:meth:`restore`)."""
+        if ids:
+            self.label[np.isin(self.label, list(ids))] = 0
+
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
-               standing: np.ndarray) -> None:
+               standing: np.ndarray, labels: np.ndarray | None = None) -> None:
         """Fold in the current frame (after :meth:`observe`; nothing if that returned
         None).
 
@@ -178,6 +206,8 @@ class StaticMemory:
             cur_gray, prev_gray: (H, W) float32 grey frames.
             standing: (H, W) bool, seen standing still now
                 (:func:`motionbits.merging.standing_still`).
+            labels: (H, W) int32 this frame's MotionBit ids, remembered with the look of
+                the pixels seen still (for :meth:`restore`); None: all background.
         """
         if self._difference is None:
             return
@@ -187,6 +217,8 @@ class StaticMemory:
         # in place; np.copyto with a broadcast ``where`` is ~100x slower
         cv2.copyTo(cur, calm.view(np.uint8), self.color)
         cv2.copyTo(cur_gray, calm.view(np.uint8), self.gray)
+        cv2.copyTo(np.zeros_like(self.label) if labels is None else labels, calm.view(np.uint8),
+                   self.label)
         self.known |= calm
         self.was_covered &= ~calm
         self._difference = None

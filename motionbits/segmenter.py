@@ -386,6 +386,11 @@ class MotionBitsSegmenter:
             cw, ch = grid.cell
             speck_area = int(np.ceil(SPECK_CELLS * cw * ch))
             labels = remove_specks(labels, min_area=speck_area)
+            # a stopped body that something passed in front of: its pixels, seen again as
+            # they looked when it stood still, take its id back
+            labels, back = self._memory.restore(labels, revealed)
+            if back is not None:
+                earned = earned | back
             # bodies set down: pieces left behind by a moving MotionBit become MotionBits
             labels = self._setdown.confirm(labels, cur_g, prev_g)
             labels, held, self._next_id = self._setdown.split(
@@ -403,13 +408,16 @@ class MotionBitsSegmenter:
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
                              first_new, still_before, back_pts, reliability, cur_g, prev_g,
                              disagree=cfg.merge_disagree, first_moved=self._spans.first)
+            present = set(np.flatnonzero(np.bincount(labels.ravel())).tolist())
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
             labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
                                     self.frame_index)
-            present = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            left = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            self._memory.forget(present - set(left.tolist()) - {0})  # retired
+            present = left
             rep = self._groups.representatives(present)
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown; a piece set down, once it still stands at the
@@ -423,7 +431,7 @@ class MotionBitsSegmenter:
             self._labels = labels
             standing = standing_still(speed, reliable, cfg.move_threshold)
             self._still = seen_still(still_seen, standing, self.frame_index)
-            self._memory.update(cur, cur_g, prev_g, standing)
+            self._memory.update(cur, cur_g, prev_g, standing, labels)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g

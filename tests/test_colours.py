@@ -51,3 +51,20 @@ def test_masks_meet_where_the_motion_says_and_thin_masks_stay():
 def test_colour_codes_are_histogram_bins():
     rgb = np.array([[[0, 0, 0], [255, 255, 255], [16, 32, 48]]], np.uint8)
     assert colour_codes(rgb, 16).tolist() == [[0, 16 ** 3 - 1, (1 * 16 + 2) * 16 + 3]]
+
+
+def test_a_mask_the_colours_would_mostly_remove_is_left_as_it_is():
+    """A 30 px mask whose outer 8 px have the colours of the table around it (a white
+    sleeve on a white shirt): the colours would keep only its 14 px core, so they are not
+    trusted there; a mask that loses less keeps the change."""
+    rng = np.random.default_rng(2)
+    rgb = _speckled((120, 200), (200, 200, 200), 15, rng)
+    rgb[38:52, 38:52] = _speckled((14, 14), (90, 60, 160), 15, rng)  # the core's colours
+    rgb[30:60, 130:160] = _speckled((30, 30), (90, 60, 160), 15, rng)  # a whole body
+    labels = np.zeros((120, 200), np.int32)
+    labels[30:60, 30:60] = 1  # most of it table-coloured: left as it is
+    labels[26:64, 126:164] = 2  # a 4 px halo round a body of its own colours: trimmed
+    out = snap_to_colours(labels, rgb, band=8)
+    assert (out == 1).sum() == (labels == 1).sum() and (out[labels == 1] == 1).all()
+    assert (out == 2).sum() < (labels == 2).sum()
+    assert (out[30:60, 130:160] == 2).mean() > 0.95

@@ -285,3 +285,23 @@ def test_a_cut_starts_a_new_shot():
     # without the cut test the old shot's MotionBit lives on in the new shot
     carried = list(segment_video(list(first) + list(second), CONFIG.with_(cut_share=0.0)))
     assert any(m.id in old_ids for r in carried[6:] for m in r.motionbits)
+
+
+def test_a_stopped_body_keeps_its_id_after_another_passes_in_front():
+    """A block moves, stops, and a taller bar sweeps across in front of it and on: once
+    uncovered, the block looks as it did when it stopped and gets its MotionBit back, under
+    the same id (before, its pixels went back to the background)."""
+    block = Body((Polygon.rect(60, 100, 100, 140, texture_seed=3),), velocity=(4.0, 0.0),
+                 stop=4)
+    bar = Body((Polygon.rect(0, 70, 40, 170, texture_seed=6),), velocity=(14.0, 0.0),
+               start=7)
+    clip = render_planar_clip([block, bar], size=SIZE, n_frames=22, seed=2)
+    results = list(segment_video(clip.frames, CONFIG))
+    body = clip.labels[5] == 1  # where the block stands from frame 4 on
+    ids, counts = np.unique(results[5].labels[body], return_counts=True)
+    block_id = ids[np.argmax(counts)]
+    assert block_id > 0 and counts.max() > 0.8 * body.sum()
+    # covered by the bar in between
+    assert max((r.labels[body] != block_id).mean() for r in results[8:18]) > 0.9
+    assert not (clip.labels[-1][body] == 2).any()  # the bar has gone on
+    assert (results[-1].labels[body] == block_id).mean() > 0.8
