@@ -30,8 +30,8 @@ MIN_KEPT = 0.5
 
 def colour_codes(rgb: np.ndarray, bins: int = COLOUR_BINS) -> np.ndarray:
     """(H, W, 3) uint8 -> (H, W) int32 histogram bin of each pixel's colour."""
-    q = (rgb // (256 // bins)).astype(np.int32)
-    return (q[..., 0] * bins + q[..., 1]) * bins + q[..., 2]
+    q = rgb // np.uint8(256 // bins)
+    return (q[..., 0].astype(np.int32) * bins + q[..., 1]) * bins + q[..., 2]
 
 
 def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:
@@ -72,8 +72,8 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
         mask = (labels == i + 1).astype(np.uint8)
         # distances (px) to the mask from outside and to the background from inside: the
         # erosion / dilations by a disk, in time linear in the box's pixels
-        inward = cv2.distanceTransform(mask, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-        outward = cv2.distanceTransform(1 - mask, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        inward = cv2.distanceTransform(mask, cv2.DIST_L2, cv2.DIST_MASK_5)
+        outward = cv2.distanceTransform(1 - mask, cv2.DIST_L2, cv2.DIST_MASK_5)
         inner = inward > band
         outer = outward <= band
         around = (outward > band) & (outward <= 2 * band) & (labels == 0)
