@@ -39,14 +39,15 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
     end.
 
     For each mask: the colour histogram of its inside (the mask eroded by ``band``) and
-    of the background in the ring from
-    ``band`` to ``2 * band`` px outside it. A pixel within ``band`` px of the outline
-    belongs to the mask where its colour's share of the inside is larger than its share
-    of the ring (the ratio smoothed over ``COLOUR_SMOOTH`` px). A mask gives pixels only to
-    the background and takes them only from it: where two masks meet, the motion decides.
-    A mask whose inside or ring has fewer than ``MIN_COLOUR_SAMPLES`` pixels is left as it
-    is (thinner than ``2 * band``, all of it is outline: its colours could not be told
-    from its overhangs', and a speck would grow by the band all round).
+    of the background in the ring from ``band`` to ``2 * band`` px outside it. A pixel
+    within ``band`` px of the outline belongs to the mask where its colour's share of the
+    inside is larger than its share of the ring (the ratio smoothed over
+    ``COLOUR_SMOOTH`` px). A mask gives pixels only to the background and takes them only
+    from it: where two masks meet, the motion decides. A mask is left as it is when its
+    inside or ring has fewer than ``MIN_COLOUR_SAMPLES`` pixels (thinner than
+    ``2 * band``, all of it is outline: its colours could not be told from its overhangs',
+    and a speck would grow by the band all round), or when the colours would take more
+    than ``1 - MIN_KEPT`` of it (a body with its surroundings' colours).
 
     Args:
         label_map: (H, W) int32 labels (0 = background).
