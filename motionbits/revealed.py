@@ -171,15 +171,19 @@ class StaticMemory:
                   & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
         return self.known[box] & shadow[inner]
 
-    def restore(self, labels: np.ndarray, revealed: np.ndarray | None
+    def restore(self, labels: np.ndarray, revealed: np.ndarray | None, moving: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray | None]:
         """Give the revealed pixels that were last seen still inside a MotionBit (a body
         that had stopped, then was covered by another passing in front of it or by its
-        shadow) that MotionBit's id again, where nothing else holds them.
+        shadow) that MotionBit's id again, where nothing else holds them -- unless that
+        MotionBit moves now (it is no longer where it stood: another body of its look may
+        stand there, as in a shell game).
 
         Args:
             labels: (H, W) int32 label map of this frame.
             revealed: (H, W) bool from :meth:`observe` (None: the memory is off).
+            moving: ids of the MotionBits that move now
+                (:func:`motionbits.records.moving_ids`).
 
         Returns:
             The label map and the (H, W) bool pixels given back (None if none).
@@ -187,6 +191,8 @@ class StaticMemory:
         if revealed is None:
             return labels, None
         back = revealed & (labels == 0) & (self.label > 0)
+        if back.any() and len(moving):
+            back &= ~np.isin(self.label, moving)
         if not back.any():
             return labels, None
         return np.where(back, self.label, labels).astype(np.int32), back

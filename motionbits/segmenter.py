@@ -386,9 +386,10 @@ class MotionBitsSegmenter:
             cw, ch = grid.cell
             speck_area = int(np.ceil(SPECK_CELLS * cw * ch))
             labels = remove_specks(labels, min_area=speck_area)
+            moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
             # a stopped body that something passed in front of: its pixels, seen again as
             # they looked when it stood still, take its id back
-            labels, back = self._memory.restore(labels, revealed)
+            labels, back = self._memory.restore(labels, revealed, list(moving))
             if back is not None:
                 earned = earned | back
             # bodies set down: pieces left behind by a moving MotionBit become MotionBits
@@ -401,7 +402,6 @@ class MotionBitsSegmenter:
                 self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)
 
         with self._stage("merging"):
-            moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
             self._spans.record(moving, self.frame_index)
             # when each node never in a MotionBit was last seen standing still (+1; 0: never)
             still_before = np.where(hist_nodes == 0, still_seen[ix[:, 1], ix[:, 0]], 0)

@@ -305,3 +305,32 @@ def test_a_stopped_body_keeps_its_id_after_another_passes_in_front():
     assert max((r.labels[body] != block_id).mean() for r in results[8:18]) > 0.9
     assert not (clip.labels[-1][body] == 2).any()  # the bar has gone on
     assert (results[-1].labels[body] == block_id).mean() > 0.8
+
+
+def test_static_memory_gives_ids_back_only_to_bodies_that_stand_still():
+    """A pixel seen still inside MotionBit 5, covered, then seen again as it was: it is 5's
+    again -- unless 5 moves now (it stood elsewhere since; a look-alike may stand there)."""
+    rng = np.random.default_rng(1)
+    table = rng.integers(0, 256, (40, 60, 3), dtype=np.uint8)
+    gray = table.mean(axis=2, dtype=np.float32)
+    everywhere = np.ones(table.shape[:2], bool)
+    labels = np.zeros(table.shape[:2], np.int32)
+    labels[10:30, 10:30] = 5
+    memory = StaticMemory(table.shape[:2], tolerance=10.0, covered=20.0)
+    memory.observe(table, gray, np.zeros_like(gray))
+    memory.update(table, gray, gray, everywhere, labels)  # seen still, inside 5
+    hand = table.copy()
+    hand[5:35, 5:35] = 40  # something passes in front
+    hand_gray = hand.mean(axis=2, dtype=np.float32)
+    memory.observe(hand, hand_gray, np.abs(hand_gray - gray))
+    memory.update(hand, hand_gray, gray, ~(labels > 0), np.zeros_like(labels))
+    revealed = memory.observe(table, gray, np.abs(gray - hand_gray))
+    nothing = np.zeros_like(labels)
+    back, given = memory.restore(nothing, revealed, [])
+    assert (back[13:27, 13:27] == 5).all() and given[13:27, 13:27].all()
+    assert not (back[labels == 0] > 0).any()
+    out, given = memory.restore(nothing, revealed, [5])
+    assert out is nothing and given is None
+    memory.forget({5})  # retired
+    out, given = memory.restore(nothing, revealed, [])
+    assert out is nothing and given is None
