@@ -52,11 +52,6 @@ NORMALIZE_EPS = 4.0
 COARSE_FACTOR = 2
 #: Frames with a side under this many px skip the coarse stage.
 COARSE_MIN_SIDE = 64
-#: px between the patches of the full-resolution stage with the MEDIUM preset (the
-#: preset's own: 3). Denser patches place motion boundaries better: mIoU / Boundary F1
-#: robot 59.1 / 58.5 -> 61.2 / 60.9, hand 52.9 / 49.1 -> 53.5 / 50.3, for ~9 ms a call
-#: at 640x480 (README, "The flow does not follow shadows").
-MEDIUM_PATCH_STRIDE = 2
 
 
 def normalize_contrast(gray: np.ndarray) -> np.ndarray:
@@ -86,8 +81,7 @@ class DISFlow:
 
     Args:
         preset: ``"ultrafast"``, ``"fast"`` or ``"medium"``. MEDIUM is the default: the
-            faster presets are too noisy for local rotation estimates; its
-            full-resolution stage places its patches ``MEDIUM_PATCH_STRIDE`` px apart.
+            faster presets are too noisy for local rotation estimates.
         normalize: False: one DIS on the grey frames (the plain OpenCV flow).
     """
 
@@ -97,8 +91,6 @@ class DISFlow:
         self.preset, self.normalize = preset, normalize
         self._dis = cv2.DISOpticalFlow_create(_DIS_PRESETS[preset])
         self._coarse = cv2.DISOpticalFlow_create(_DIS_PRESETS[preset])
-        if normalize and preset == "medium":
-            self._dis.setPatchStride(MEDIUM_PATCH_STRIDE)
         self._inputs: list[tuple[np.ndarray, tuple[np.ndarray, ...]]] = []  # last frames
 
     def _prepare(self, frame: np.ndarray) -> tuple[np.ndarray, ...]:
