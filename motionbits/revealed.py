@@ -20,7 +20,10 @@ share of the moving camera's static false positives). The cast-shadow test
 (:meth:`StaticMemory.shadowed`) is left to a still camera (measured: README, "Moving
 cameras"). A body that stood still at first and moves away reveals what it hid, which
 the memory never saw: nothing changes there. A body that comes to rest is remembered as
-it is once it is seen still, so a stopped body is never "revealed" away.
+it is once it is seen still, so a stopped body is never "revealed" away -- and with it
+the id of its MotionBit: when a hand (or another body, or a shadow) has passed in front
+of it, its pixels seen again as they were take that id back (:meth:`StaticMemory.restore`),
+unless that MotionBit moves now or was retired.
 """
 
 from __future__ import annotations
@@ -197,10 +200,10 @@ class StaticMemory:
             return labels, None
         return np.where(back, self.label, labels).astype(np.int32), back
 
-    def forget(self, ids: set[int]) -> None:
-        """Retired MotionBits are not given back (:meth:`restore`)."""
-        if ids:
-            self.label[np.isin(self.label, list(ids))] = 0
+    def forget(self, ids: np.ndarray) -> None:
+        """Retired MotionBits (``ids``, (k,) int) are not given back (:meth:`restore`)."""
+        if len(ids):
+            self.label[np.isin(self.label, ids)] = 0
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
                standing: np.ndarray, labels: np.ndarray | None = None) -> None:

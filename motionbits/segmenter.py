@@ -408,16 +408,15 @@ class MotionBitsSegmenter:
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
                              first_new, still_before, back_pts, reliability, cur_g, prev_g,
                              disagree=cfg.merge_disagree, first_moved=self._spans.first)
-            present = set(np.flatnonzero(np.bincount(labels.ravel())).tolist())
+            before = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
             labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
                                     self.frame_index)
-            left = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
-            self._memory.forget(present - set(left.tolist()) - {0})  # retired
-            present = left
+            present = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            self._memory.forget(np.setdiff1d(before, present))  # retired
             rep = self._groups.representatives(present)
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown; a piece set down, once it still stands at the

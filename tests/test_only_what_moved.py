@@ -331,6 +331,6 @@ def test_static_memory_gives_ids_back_only_to_bodies_that_stand_still():
     assert not (back[labels == 0] > 0).any()
     out, given = memory.restore(nothing, revealed, [5])
     assert out is nothing and given is None
-    memory.forget({5})  # retired
+    memory.forget(np.array([5]))  # retired
     out, given = memory.restore(nothing, revealed, [])
     assert out is nothing and given is None
