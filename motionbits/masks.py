@@ -22,7 +22,7 @@ from motionbits.twists import kabsch_2d, rigid_matrix
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "drop_labels",
            "hide_small",
            "hide_edgeless", "snap_to_edges", "trim_flat_background", "SPECK_CELLS",
-           "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT", "BACKGROUND_SHARE"]
+           "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT", "HALO_MASK_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -41,10 +41,10 @@ OUTLINE_QUANTILE = 0.9
 OUTLINE_BAND = 3
 #: A flat image region -- colour gradient under ``HALO_FLAT_GRADIENT`` grey levels per px,
 #: half :data:`motionbits.aperture.FLAT_GRADIENT`: a body of the table's own material
-#: joins the table's region through its weaker edges at 6 -- of which at least this share
-#: is background: the masks' pixels in it are a halo.
+#: joins the table's region through its weaker edges at 6 -- of which a mask covers less
+#: than ``HALO_MASK_SHARE``: that mask's pixels in it are a halo.
 HALO_FLAT_GRADIENT = 3.0
-BACKGROUND_SHARE = 0.8
+HALO_MASK_SHARE = 0.25
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,
@@ -258,13 +258,14 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
 
 def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     """Give back to the background the mask pixels that lie in a flat region of the image
-    of which at least ``BACKGROUND_SHARE`` is background.
+    of which their mask covers less than ``HALO_MASK_SHARE``.
 
     A mask that overhangs its body onto a flat table (smeared flow, a soft shadow that
     moves with the body) crosses no image edge: the overhang and the table around it are
     one flat region (:func:`motionbits.aperture.flat_regions`: colour gradient under
-    ``HALO_FLAT_GRADIENT``), most of it outside the masks. A body's own flat faces are
-    closed by its edges, and mostly inside its mask.
+    ``HALO_FLAT_GRADIENT``), most of it outside the masks. Where several bodies move over
+    one flat table, their overhangs can together cover most of it, each a small part. A
+    body's own flat faces are closed by its edges, and mostly inside its mask.
 
     Args:
         label_map: (H, W) int32 labels (0 = background).
@@ -277,12 +278,13 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
         return label_map
     _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
-    background = np.bincount(regions[label_map == 0], minlength=len(stats)) / area
-    halo = background >= BACKGROUND_SHARE
-    halo[0] = False  # not a region: the pixels that are not flat
-    if not halo.any():
-        return label_map
-    return np.where(halo[regions], 0, label_map).astype(np.int32)
+    # each (region, label) pair as one integer: the share of its region each mask covers
+    top = int(label_map.max()) + 1
+    pair = regions.astype(np.int64) * top + label_map
+    share = np.bincount(pair.ravel(), minlength=len(stats) * top)[pair] / area[regions]
+    # region 0: the pixels that are not flat
+    halo = (regions > 0) & (label_map > 0) & (share < HALO_MASK_SHARE)
+    return np.where(halo, 0, label_map).astype(np.int32)
 
 
 def hide_edgeless(label_map: np.ndarray, gradient: np.ndarray) -> np.ndarray:

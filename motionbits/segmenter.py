@@ -36,7 +36,8 @@ from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, hide_edgeless,
                               hide_small, remove_specks, snap_to_edges,
                               trim_flat_background)
-from motionbits.merging import MotionBitGroups, observe_touching, seen_still, standing_still
+from motionbits.merging import (MotionBitGroups, drop_seen_still, observe_touching, seen_still,
+                                standing_still)
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
@@ -383,6 +384,12 @@ class MotionBitsSegmenter:
                 bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
                 evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold,
                 revealed=revealed)
+            # a point seen standing still while a MotionBit moved does not join it now
+            # (with a still camera: under a moving one, standing still is judged against
+            # the static world's model, and parallax or a moving shadow's edge on a kerb
+            # reads as motion the next frame)
+            if cam is None:
+                labels = drop_seen_still(labels, prior, still_seen, self._spans.first)
             cw, ch = grid.cell
             speck_area = int(np.ceil(SPECK_CELLS * cw * ch))
             labels = remove_specks(labels, min_area=speck_area)

@@ -269,3 +269,21 @@ def test_overhangs_onto_a_flat_table_are_trimmed_bodies_kept():
     assert (out[labels == 2] == 2).all()  # the blue body's region is half in its mask
     nothing = np.zeros_like(labels)
     assert trim_flat_background(nothing, rgb) is nothing
+
+
+def test_overhangs_of_several_bodies_onto_one_flat_table_are_all_trimmed():
+    """Three bodies moved over one white table, each mask spilling onto a fifth of it:
+    together they cover most of the table (before, the spill stayed where the table was
+    less than 80% background, as on ``02_cups.mp4``), each only a small part."""
+    rgb = np.full((240, 320, 3), (225, 225, 220), np.uint8)
+    labels = np.zeros((240, 320), np.int32)
+    for i, x in enumerate((20, 120, 220)):
+        rgb[100:140, x + 20:x + 60] = ((200, 40, 40), (40, 200, 40), (40, 40, 200))[i]
+        labels[60:200, x:x + 80] = i + 1  # the body and its spill all round
+    out = trim_flat_background(labels, rgb)
+    for i, x in enumerate((20, 120, 220)):
+        body = np.zeros_like(labels, bool)
+        body[100:140, x + 20:x + 60] = True
+        assert (out[body] == i + 1).all()
+        spill = (labels == i + 1) & (ndimage.distance_transform_edt(~body) > 4)
+        assert not (out[spill] > 0).any(), i

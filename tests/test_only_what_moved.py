@@ -9,8 +9,8 @@ import motionbits.segmenter as segmenter_module
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
 from motionbits.masks import hide_small
-from motionbits.merging import (MotionBitGroups, observe_touching, seen_still, standing_still,
-                                touching_pairs)
+from motionbits.merging import (MotionBitGroups, drop_seen_still, observe_touching, seen_still,
+                                standing_still, touching_pairs)
 from motionbits.nodes import NodeGrid
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -334,3 +334,43 @@ def test_static_memory_gives_ids_back_only_to_bodies_that_stand_still():
     memory.forget(np.array([5]))  # retired
     out, given = memory.restore(nothing, revealed, [])
     assert out is nothing and given is None
+
+
+def test_a_block_pushed_by_a_bar_is_a_motionbit_of_its_own():
+    """A bar moves from the first frame and, overlapping a block's edge, pushes it from
+    frame 6 on with its own motion. The block stood still while the bar moved, so none of
+    it may join the bar's MotionBit; it gets one of its own (before: up to 0.89 of it under
+    the bar's id and none of it in a MotionBit of its own)."""
+    v, start, side = 4.0, 6, 42
+    x0 = 70 + v * start
+    block = Body((Polygon.rect(x0, 95, x0 + side, 95 + side, texture_seed=5),),
+                 velocity=(v, 0.0), start=start)
+    bar = Body((Polygon.rect(20, 80, 82, 160, texture_seed=6),), velocity=(v, 0.0))
+    clip = render_planar_clip([block, bar], size=SIZE, n_frames=16, seed=2)
+    results = list(segment_video(clip.frames, CONFIG))
+    for t in range(8, 16):
+        labels, truth = results[t].labels, clip.labels[t]
+        bar_id = np.bincount(labels[truth == 2]).argmax()
+        assert bar_id > 0 and (labels[truth == 1] == bar_id).mean() < 0.2, t
+    on_block = results[-1].labels[clip.labels[-1] == 1]
+    ids, counts = np.unique(on_block[on_block > 0], return_counts=True)
+    assert counts.max() > 0.7 * on_block.size and ids[np.argmax(counts)] != bar_id
+
+
+def test_drop_seen_still_drops_only_places_seen_still_since_the_motionbit_moved():
+    """MotionBit 1 (first moved at frame 2) now also holds a 6 px wide place and a 1 px
+    sliver along its outline that were seen standing still at frame 4."""
+    labels = np.zeros((20, 30), np.int32)
+    labels[5:15, 4:12] = 1  # its body
+    labels[5:15, 12:18] = 1  # the place that stood still
+    labels[4, 4:12] = 1  # a sliver along its outline
+    labels[16:19, 20:28] = 2  # a MotionBit not known to have moved: never dropped
+    prior = np.where(labels == 1, 0, labels)
+    prior[5:15, 4:12] = 1  # held at the last frame: stays, whenever it stood still
+    still_seen = np.full(labels.shape, 5, np.int32)  # 1 + the last frame seen still
+    out = drop_seen_still(labels.copy(), prior, still_seen, {1: 2})
+    expected = labels.copy()
+    expected[5:15, 12:18] = 0
+    assert (out == expected).all()
+    # seen still only before 1 first moved: nothing goes
+    assert (drop_seen_still(labels.copy(), prior, still_seen, {1: 5}) == labels).all()
