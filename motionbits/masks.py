@@ -278,13 +278,15 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
         return label_map
     _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
-    # each (region, label) pair as one integer: the share of its region each mask covers
-    top = int(label_map.max()) + 1
-    pair = regions.astype(np.int64) * top + label_map
-    share = np.bincount(pair.ravel(), minlength=len(stats) * top)[pair] / area[regions]
-    # region 0: the pixels that are not flat
-    halo = (regions > 0) & (label_map > 0) & (share < HALO_MASK_SHARE)
-    return np.where(halo, 0, label_map).astype(np.int32)
+    # the labelled pixels of flat regions (region 0: the pixels that are not flat), each
+    # (region, label) pair as one integer: the share of its region each mask covers
+    at = np.flatnonzero(((label_map > 0) & (regions > 0)).ravel())
+    region, label = regions.ravel()[at], label_map.ravel()[at]
+    pair = region.astype(np.int64) * (int(label_map.max()) + 1) + label
+    share = np.bincount(pair)[pair] / area[region]
+    out = label_map.astype(np.int32, copy=True)
+    out.ravel()[at[share < HALO_MASK_SHARE]] = 0
+    return out
 
 
 def hide_edgeless(label_map: np.ndarray, gradient: np.ndarray) -> np.ndarray:
