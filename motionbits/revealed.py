@@ -206,7 +206,7 @@ class StaticMemory:
             self.label[np.isin(self.label, ids)] = 0
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
-               standing: np.ndarray, labels: np.ndarray | None = None) -> None:
+               standing: np.ndarray, labels: np.ndarray) -> None:
         """Fold in the current frame (after :meth:`observe`; nothing if that returned
         None).
 
@@ -216,7 +216,7 @@ class StaticMemory:
             standing: (H, W) bool, seen standing still now
                 (:func:`motionbits.merging.standing_still`).
             labels: (H, W) int32 this frame's MotionBit ids, remembered with the look of
-                the pixels seen still (for :meth:`restore`); None: all background.
+                the pixels seen still (for :meth:`restore`).
         """
         if self._difference is None:
             return
@@ -226,8 +226,7 @@ class StaticMemory:
         # in place; np.copyto with a broadcast ``where`` is ~100x slower
         cv2.copyTo(cur, calm.view(np.uint8), self.color)
         cv2.copyTo(cur_gray, calm.view(np.uint8), self.gray)
-        cv2.copyTo(np.zeros_like(self.label) if labels is None else labels, calm.view(np.uint8),
-                   self.label)
+        cv2.copyTo(labels, calm.view(np.uint8), self.label)
         self.known |= calm
         self.was_covered &= ~calm
         self._difference = None

@@ -121,7 +121,7 @@ def _remembered(base: np.ndarray) -> StaticMemory:
     memory = StaticMemory(SIZE, tolerance=10.0, covered=20.0)
     gray = _gray(base)
     memory.observe(base, gray, np.zeros(SIZE, np.float32))
-    memory.update(base, gray, gray, np.ones(SIZE, bool))
+    memory.update(base, gray, gray, np.ones(SIZE, bool), np.zeros(SIZE, np.int32))
     return memory
 
 

@@ -167,7 +167,7 @@ def test_static_memory_reveals_background_seen_again_after_it_was_covered():
         if revealed is not None:  # lowered to the residual against the memory there
             assert (residual[revealed] < 1e-3).all()
             assert (residual[~revealed] == np.abs(gray[0] - gray[1])[~revealed]).all()
-        memory.update(cur, *gray, standing)
+        memory.update(cur, *gray, standing, np.zeros(standing.shape, np.int32))
         return revealed
 
     step(table, table)  # seen standing still
@@ -207,7 +207,7 @@ def test_static_memory_follows_a_moving_camera():
         gray = [f.mean(axis=2, dtype=np.float32) for f in (cur, prev)]
         residual = np.abs(gray[0] - gray[1])
         revealed = memory.observe(cur, gray[0], residual, world)
-        memory.update(cur, *gray, standing)
+        memory.update(cur, *gray, standing, np.zeros(standing.shape, np.int32))
         return revealed
 
     step(view[0], view[0])  # seen standing still
