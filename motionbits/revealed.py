@@ -114,6 +114,14 @@ class StaticMemory:
                    still)
         return revealed
 
+    def changed(self) -> np.ndarray | None:
+        """(H, W) bool: pixels seen standing still before that look otherwise now (by more
+        than ``covered``; this frame's :meth:`observe`), or None when the memory is off --
+        something other than the static world stands there."""
+        if self._difference is None:
+            return None
+        return self.known & (self._difference > self.covered)
+
     def follow(self, world: np.ndarray) -> None:
         """Carry the memory to the current frame of a moving camera: each pixel takes
         what was remembered where its static world was in the last frame (``world``,

@@ -403,7 +403,7 @@ class MotionBitsSegmenter:
             labels = self._setdown.confirm(labels, cur_g, prev_g)
             labels, held, self._next_id = self._setdown.split(
                 labels, prior, prior_valid, carried_earned, ids, thetas, trans, cur_g, prev_g,
-                grid.cell, self._next_id, cam)
+                grid.cell, self._next_id, cam, self._memory.changed())
             earned = earned | held
             for i in self._setdown.pending:
                 self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)

@@ -7,7 +7,7 @@ hand's -- no longer explains them and "static" does, so they would return to the
 background although the body moved. A piece of a MotionBit lost this way becomes a new
 MotionBit when
 
-- it is compact (an opening by two grid cells keeps most of it), covers at least
+- it is compact (an opening by one grid cell keeps most of it), covers at least
   ``SETDOWN_CELLS`` grid cells, and most of its pixels *earned* their label (the
   MotionBit's motion once explained them better than "static");
 - it is at rest now, and "static" explains it better than its MotionBit's motion by a
@@ -16,8 +16,12 @@ MotionBit when
   motion over the last ``WINDOW`` frames (and standing still this frame), match the frame
   of then clearly better than the static world does, and within ``rest`` grey levels
   (:func:`motionbits.retirement.origin_residuals`, the test that retires MotionBits that
-  never moved). Background that a moving MotionBit uncovered or smeared its label onto
-  fails this test: it was there all along, or what was there before was something else;
+  never moved) -- or, where they do not match that closely (the carrier hid part of the
+  body, or lifting it changed its scale), most of the piece looks unlike the static world
+  last seen standing still there (``NEW_SHARE``; :meth:`StaticMemory.changed`): a body
+  now stands where the table was. Background that a moving MotionBit uncovered or smeared
+  its label onto fails this test: it was there all along, or what was there before was
+  something else and it looks as the static world did;
 
 and it is shown from the next frame on, if it still stands there, at rest. A piece lost
 next to a piece set down earlier by the same MotionBit joins it.
@@ -39,18 +43,23 @@ from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
 from motionbits.twists import rigid_matrix
 
 __all__ = ["SetDown", "SETDOWN_CELLS", "EARNED_SHARE", "COMPACT_SHARE", "COMPACT_CELLS",
-           "REST_SHARE", "WINDOW"]
+           "REST_SHARE", "NEW_SHARE", "WINDOW"]
 
 #: A piece left behind must cover at least this many grid cells ...
 SETDOWN_CELLS = 8
 #: ... this share of its pixels must have earned their label ...
 EARNED_SHARE = 0.5
 #: ... and an opening by a square of ``COMPACT_CELLS`` grid cells must keep this share of
-#: it (compact: the strip of background a moving body uncovers is not).
+#: it (compact: the strip of background a moving body uncovers is not). One cell, not two:
+#: a small block seen at 45 degrees, part of it still under the fingers, is a band ~9 px
+#: across, which an 11 px square removed (pick-and-place, README "Bodies set down").
 COMPACT_SHARE = 0.5
-COMPACT_CELLS = 2
+COMPACT_CELLS = 1
 #: Frames over which a piece must be seen to have come with its MotionBit.
 WINDOW = 3
+#: ... or, where the followed-back look does not match (the carrier hid the body, a lift
+#: changed its scale), this share of it looks unlike the static world last seen there.
+NEW_SHARE = 0.5
 #: At the next frame it is confirmed if it still holds this share of its area.
 REST_SHARE = 0.5
 
@@ -124,7 +133,8 @@ class SetDown:
     def split(self, labels: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
               earned: np.ndarray, ids: np.ndarray, thetas: np.ndarray, trans: np.ndarray,
               cur: np.ndarray, prev: np.ndarray, cell: tuple[float, float], next_id: int,
-              cam: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, int]:
+              cam: np.ndarray | None, changed: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, int]:
         """New MotionBits from the pieces that MotionBits with a cluster now left behind.
 
         Args:
@@ -138,6 +148,8 @@ class SetDown:
             cell: (w, h) px of one grid cell.
             next_id: the id the next new MotionBit gets.
             cam: (3, 3) camera motion of this frame (current -> previous) or None (static).
+            changed: (H, W) bool or None, pixels that look unlike the static world last
+                seen standing still there (:meth:`StaticMemory.changed`); None: no memory.
 
         Returns:
             The label map with the new pieces, the (H, W) bool pixels they hold (their
@@ -179,7 +191,8 @@ class SetDown:
                 full = np.zeros(labels.shape, bool)
                 full[box] = piece
                 world, body = self._came_with(int(lab), cur, full, cam)
-                if not (world - body > self.evidence and body < self.rest):
+                new_here = changed is not None and changed[box][piece].mean() > NEW_SHARE
+                if not (world - body > self.evidence and (body < self.rest or new_here)):
                     continue
                 new = self._neighbour(out, box, piece, int(lab), side)
                 if new is None:

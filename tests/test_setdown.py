@@ -94,3 +94,43 @@ def test_retire_needs_a_static_frame_that_explains_the_pixels():
     out, _ = retire(labels, {}, ids, thetas, trans, 1, None, prev, cur, 5.0, explained=12.0,
                     first=first)
     assert not out.any()
+
+
+def test_split_takes_a_hidden_piece_that_is_new_where_it_stands():
+    """A carried patch half hidden under a flat "finger" until it is set down does not
+    match its followed-back look, yet it came with its MotionBit: it becomes a new MotionBit
+    where it looks unlike the static world last seen there, and not otherwise."""
+    rng = np.random.default_rng(2)
+    h, w = 60, 80
+    world = rng.uniform(0, 255, (h + 40, w + 40)).astype(np.float32)
+    patch = rng.uniform(0, 255, (20, 20)).astype(np.float32)
+    frames = []
+    for k in range(5):  # the patch moves 3 px/frame until frame 3, then stays
+        f = world[20:20 + h, 20:20 + w].copy()
+        x = 10 + 3 * min(k, 3)
+        f[20:40, x:x + 20] = patch
+        if k < 3:
+            f[20:30, x:x + 20] = 128.0  # the carrier's flat finger over half of it
+        frames.append(f)
+    cell = (4.0, 4.0)
+    ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])
+    prior = np.zeros((h, w), np.int32)
+    prior[20:40, 19:39] = 1
+    for new_here in (True, False):
+        sd = SetDown(evidence=3.0, rest=12.0)
+        for k in range(1, 4):
+            sd.record(frames[k - 1], ids, thetas, trans, None)
+        changed = np.full((h, w), new_here)
+        out, held, nxt = sd.split(np.zeros((h, w), np.int32), prior, np.ones((h, w), bool),
+                                  prior > 0, ids, thetas, trans, frames[4], frames[3], cell, 2,
+                                  None, changed)
+        assert held.any() == new_here and (nxt == 3) == new_here
+        if new_here:
+            assert (out[held] == 2).all() and held[prior > 0].mean() > 0.9
+    # without the memory, only the followed-back look counts: the hidden piece is lost
+    sd = SetDown(evidence=3.0, rest=12.0)
+    for k in range(1, 4):
+        sd.record(frames[k - 1], ids, thetas, trans, None)
+    _, held, _ = sd.split(np.zeros((h, w), np.int32), prior, np.ones((h, w), bool), prior > 0,
+                          ids, thetas, trans, frames[4], frames[3], cell, 2, None)
+    assert not held.any()
