@@ -96,6 +96,14 @@ def test_retire_needs_a_static_frame_that_explains_the_pixels():
     assert not out.any()
 
 
+def _recorded(frames, ids, thetas, trans) -> SetDown:
+    """A SetDown that saw the motions of frames 1..3 (``evidence`` 3, ``rest`` 12)."""
+    sd = SetDown(evidence=3.0, rest=12.0)
+    for k in range(1, 4):
+        sd.record(frames[k - 1], ids, thetas, trans, None)
+    return sd
+
+
 def test_split_takes_a_hidden_piece_that_is_new_where_it_stands():
     """A carried patch half hidden under a flat "finger" until it is set down does not
     match its followed-back look, yet it came with its MotionBit: it becomes a new MotionBit
@@ -116,21 +124,14 @@ def test_split_takes_a_hidden_piece_that_is_new_where_it_stands():
     ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])
     prior = np.zeros((h, w), np.int32)
     prior[20:40, 19:39] = 1
+    args = (np.zeros((h, w), np.int32), prior, np.ones((h, w), bool), prior > 0, ids, thetas,
+            trans, frames[4], frames[3], cell, 2, None)
     for new_here in (True, False):
-        sd = SetDown(evidence=3.0, rest=12.0)
-        for k in range(1, 4):
-            sd.record(frames[k - 1], ids, thetas, trans, None)
-        changed = np.full((h, w), new_here)
-        out, held, nxt = sd.split(np.zeros((h, w), np.int32), prior, np.ones((h, w), bool),
-                                  prior > 0, ids, thetas, trans, frames[4], frames[3], cell, 2,
-                                  None, changed)
+        out, held, nxt = _recorded(frames, ids, thetas, trans).split(
+            *args, np.full((h, w), new_here))
         assert held.any() == new_here and (nxt == 3) == new_here
         if new_here:
             assert (out[held] == 2).all() and held[prior > 0].mean() > 0.9
     # without the memory, only the followed-back look counts: the hidden piece is lost
-    sd = SetDown(evidence=3.0, rest=12.0)
-    for k in range(1, 4):
-        sd.record(frames[k - 1], ids, thetas, trans, None)
-    _, held, _ = sd.split(np.zeros((h, w), np.int32), prior, np.ones((h, w), bool), prior > 0,
-                          ids, thetas, trans, frames[4], frames[3], cell, 2, None)
+    _, held, _ = _recorded(frames, ids, thetas, trans).split(*args)
     assert not held.any()
