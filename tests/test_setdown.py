@@ -60,10 +60,8 @@ def test_split_needs_a_piece_that_came_with_its_motionbit():
     cell = (4.0, 4.0)
     ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])  # parent moves on
     for came in (True, False):
-        sd = SetDown(evidence=3.0, rest=12.0)
         seq = frames if came else [frames[-1]] * 5  # False: the patch was always there
-        for k in range(1, 4):
-            sd.record(seq[k - 1], ids, thetas, trans, None)
+        sd = _recorded(seq, ids, thetas, trans)
         labels = np.zeros((h, w), np.int32)
         prior = np.zeros((h, w), np.int32)
         prior[20:40, 19:39] = 1
