@@ -43,20 +43,31 @@ def test_body_set_down_keeps_its_own_motionbit(seed):
     assert ((last.labels > 0) & static).sum() <= 0.05 * static.sum()
 
 
+def _carried_patch(seed: int, size: tuple[int, int], finger: bool) -> list[np.ndarray]:
+    """5 (H, W) float32 frames: a 20x20 textured patch on a textured world moves 3 px/frame
+    until frame 3, then stays; ``finger``: a flat grey band covers its top half until then
+    (the carrier's finger)."""
+    rng = np.random.default_rng(seed)
+    h, w = size
+    world = rng.uniform(0, 255, (h + 40, w + 40)).astype(np.float32)
+    patch = rng.uniform(0, 255, (20, 20)).astype(np.float32)
+    frames = []
+    for k in range(5):
+        f = world[20:20 + h, 20:20 + w].copy()
+        x = 10 + 3 * min(k, 3)
+        f[20:40, x:x + 20] = patch
+        if finger and k < 3:
+            f[20:30, x:x + 20] = 128.0
+        frames.append(f)
+    return frames
+
+
 def test_split_needs_a_piece_that_came_with_its_motionbit():
     """A compact piece of a MotionBit that "static" now explains becomes a new MotionBit
     only if its images moved with the MotionBit (a textured patch that was carried), not if
     it is background that was there all along."""
-    rng = np.random.default_rng(0)
     h, w = 60, 80
-    world = rng.uniform(0, 255, (h + 40, w + 40)).astype(np.float32)
-    patch = rng.uniform(0, 255, (20, 20)).astype(np.float32)
-    frames = []
-    for k in range(5):  # the patch moves 3 px/frame until frame 3, then stays
-        f = world[20:20 + h, 20:20 + w].copy()
-        x = 10 + 3 * min(k, 3)
-        f[20:40, x:x + 20] = patch
-        frames.append(f)
+    frames = _carried_patch(0, (h, w), finger=False)
     cell = (4.0, 4.0)
     ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])  # parent moves on
     for came in (True, False):
@@ -106,18 +117,8 @@ def test_split_takes_a_hidden_piece_that_is_new_where_it_stands():
     """A carried patch half hidden under a flat "finger" until it is set down does not
     match its followed-back look, yet it came with its MotionBit: it becomes a new MotionBit
     where it looks unlike the static world last seen there, and not otherwise."""
-    rng = np.random.default_rng(2)
     h, w = 60, 80
-    world = rng.uniform(0, 255, (h + 40, w + 40)).astype(np.float32)
-    patch = rng.uniform(0, 255, (20, 20)).astype(np.float32)
-    frames = []
-    for k in range(5):  # the patch moves 3 px/frame until frame 3, then stays
-        f = world[20:20 + h, 20:20 + w].copy()
-        x = 10 + 3 * min(k, 3)
-        f[20:40, x:x + 20] = patch
-        if k < 3:
-            f[20:30, x:x + 20] = 128.0  # the carrier's flat finger over half of it
-        frames.append(f)
+    frames = _carried_patch(2, (h, w), finger=True)
     cell = (4.0, 4.0)
     ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])
     prior = np.zeros((h, w), np.int32)
