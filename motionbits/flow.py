@@ -52,10 +52,6 @@ NORMALIZE_EPS = 4.0
 COARSE_FACTOR = 2
 #: Frames with a side under this many px skip the coarse stage.
 COARSE_MIN_SIDE = 64
-#: px between the patches of the full-resolution stage with the MEDIUM preset (OpenCV's
-#: MEDIUM: 3). Denser patches cost ~10 ms a call at 640x480 and follow thin and small
-#: parts better (robot track mIoU 63.0 -> 65.6; README "The flow does not follow shadows").
-MEDIUM_FINE_STRIDE = 2
 
 
 def normalize_contrast(gray: np.ndarray) -> np.ndarray:
@@ -78,8 +74,7 @@ class DISFlow:
 
     Two stages: DIS on the grey frames downsampled by ``COARSE_FACTOR`` finds the large
     displacements; DIS on the full-resolution frames after :func:`normalize_contrast`
-    refines it from there (with the MEDIUM preset, on patches ``MEDIUM_FINE_STRIDE`` px
-    apart). DIS on the grey frames alone follows moving cast shadows
+    refines it from there. DIS on the grey frames alone follows moving cast shadows
     across static texture (7.7% of the static pixels of the pick-and-place track moved
     > 0.6 px, 5.7% now; mean error 1.07 -> 0.62 px); on the normalised frames alone it
     loses displacements above ~15 px (their coarse pyramid levels are nearly flat).
@@ -96,8 +91,6 @@ class DISFlow:
         self.preset, self.normalize = preset, normalize
         self._dis = cv2.DISOpticalFlow_create(_DIS_PRESETS[preset])
         self._coarse = cv2.DISOpticalFlow_create(_DIS_PRESETS[preset])
-        if normalize and preset == "medium":
-            self._dis.setPatchStride(MEDIUM_FINE_STRIDE)
         self._inputs: list[tuple[np.ndarray, tuple[np.ndarray, ...]]] = []  # last frames
 
     def _prepare(self, frame: np.ndarray) -> tuple[np.ndarray, ...]:

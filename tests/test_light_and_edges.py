@@ -106,18 +106,13 @@ def _shadow_clip(n_frames: int = 12) -> list[np.ndarray]:
             .astype(np.uint8) for t in range(n_frames)]
 
 
-@pytest.mark.parametrize("plain_flow, relight_sigma, expect_marks",
-                         [(True, 3.0, False), (True, 0.0, True), (False, 0.0, False)])
-def test_moving_shadow_on_texture_is_not_a_motionbit(plain_flow, relight_sigma, expect_marks):
-    """A soft shadow (penumbra ~30 px) sweeping 9 px/frame over a static texture. On the plain
-    OpenCV flow, which follows the shadow, it is a MotionBit when only grey levels are
-    compared, and never with the light-change test (``relight_sigma``, off by default). The
-    default flow (``DISFlow``: contrast-normalised frames, dense patches) does not follow
-    it: no MotionBit without the light-change test either (hard-edged shadows still can
-    be, see the README)."""
+@pytest.mark.parametrize("relight_sigma, expect_marks", [(3.0, False), (0.0, True)])
+def test_moving_shadow_on_texture_is_not_a_motionbit(relight_sigma, expect_marks):
+    """A soft shadow (penumbra ~30 px) sweeping 9 px/frame over a static texture: with the
+    light-change test (``relight_sigma``, off by default) it is never a MotionBit; comparing
+    grey levels only, it is (hard-edged shadows still are, see the README)."""
     config = CONFIG.with_(relight_sigma=relight_sigma)
-    flow = DISFlow(normalize=False) if plain_flow else None
-    shown = [len(r.motionbits) for r in segment_video(_shadow_clip(), config, flow=flow)]
+    shown = [len(r.motionbits) for r in segment_video(_shadow_clip(), config)]
     assert (max(shown) > 0) == expect_marks, shown
 
 
