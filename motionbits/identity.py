@@ -16,11 +16,15 @@ import numpy as np
 from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 
-__all__ = ["refine_history", "match_ids", "identify_clusters"]
+__all__ = ["refine_history", "match_ids", "identify_clusters", "NOVEL_SHARE"]
 
 #: Side (nodes) of the square in which a node counts as interior to its cluster (all of
 #: it in one cluster); a new MotionBit needs at least one interior node.
 INTERIOR_WINDOW = 3
+#: A MotionBit born at the last frame is also confirmed, if it moves, when more than this
+#: share of its nodes show something new where they stand (unlike the static world last
+#: seen there): a body tumbling in 3D, whose images no 2D motion explains.
+NOVEL_SHARE = 0.5
 
 
 def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> np.ndarray:
@@ -111,7 +115,8 @@ def identify_clusters(node_cluster: np.ndarray, displacement: np.ndarray,
                       prior_nodes: np.ndarray, evidence: Callable[[], np.ndarray],
                       shape: tuple[int, int], next_id: int, tentative: set[int], *,
                       min_nodes: int, match_iou: float, move_threshold: float,
-                      motion_evidence: float) -> tuple[np.ndarray, np.ndarray, set[int], int]:
+                      motion_evidence: float, novel: Callable[[], np.ndarray] | None = None
+                      ) -> tuple[np.ndarray, np.ndarray, set[int], int]:
     """Drop noise clusters and give each cluster a stable MotionBit id.
 
     A cluster continues the earlier MotionBit it overlaps most (:func:`match_ids`); a
@@ -120,7 +125,9 @@ def identify_clusters(node_cluster: np.ndarray, displacement: np.ndarray,
     only if its flow explains its images better than "static" (``evidence()``, grey
     levels per node, averaged over the cluster), which keeps textureless regions with
     flow smeared in from a moving neighbour from becoming bodies. A MotionBit born at the
-    last frame (``tentative``) stands only if it visibly moves again now.
+    last frame (``tentative``) stands only if it visibly moves again now -- its flow
+    explains its images, or (``novel``) most of it shows something new where it stands: a
+    block tumbling as it is pushed changes its look, and no 2D motion explains it.
 
     Args:
         node_cluster: (n,) int cluster index of each node (0 = none).
@@ -133,6 +140,8 @@ def identify_clusters(node_cluster: np.ndarray, displacement: np.ndarray,
         tentative: ids born at the last frame, not yet confirmed.
         min_nodes: clusters with fewer nodes are noise.
         match_iou, move_threshold, motion_evidence: the config's values.
+        novel: None, or called at most once: (n,) bool, nodes that look unlike the static
+            world last seen standing still there (:meth:`StaticMemory.changed`).
 
     Returns:
         node_ids (n,) int64 MotionBit id of each node (0 = none); ids (K,) int64 the ids
@@ -158,8 +167,9 @@ def identify_clusters(node_cluster: np.ndarray, displacement: np.ndarray,
         moves = np.median(displacement[sel]) > move_threshold
         if c in matched:
             i = matched[c]
-            ids.append(i if i not in tentative or (
-                moves and np.mean(evidence()[sel]) > motion_evidence) else 0)
+            ids.append(i if i not in tentative or (moves and (
+                np.mean(evidence()[sel]) > motion_evidence
+                or (novel is not None and np.mean(novel()[sel]) > NOVEL_SHARE))) else 0)
         elif has_interior[c] and moves and np.mean(evidence()[sel]) > motion_evidence:
             ids.append(next_id)
             newborn.add(next_id)

@@ -365,12 +365,15 @@ class MotionBitsSegmenter:
                                                                cfg.camera_tolerance),
                 cur_g, pulled, win)[ix[:, 1], ix[:, 0]] * (
                     1.0 if epipolar is None else ~epipolar))
+            changed = self._memory.changed()
+            novel = None if changed is None else cache(lambda: changed[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
             node_ids, ids, self._tentative, self._next_id = identify_clusters(
                 node_cluster, motions.displacement, prior[ix[:, 1], ix[:, 0]], evidence,
                 (grid.rows, grid.cols), self._next_id, self._tentative,
                 min_nodes=cfg.min_cluster_nodes, match_iou=cfg.match_iou,
-                move_threshold=cfg.move_threshold, motion_evidence=cfg.motion_evidence)
+                move_threshold=cfg.move_threshold, motion_evidence=cfg.motion_evidence,
+                novel=novel)
             thetas, trans = fit_cluster_motions(pts, back_pts, reliability, node_ids, ids,
                                                 cfg.ransac_threshold)
             # ids carried validly (np.unique's result, without its sort)
@@ -403,7 +406,7 @@ class MotionBitsSegmenter:
             labels = self._setdown.confirm(labels, cur_g, prev_g)
             labels, held, self._next_id = self._setdown.split(
                 labels, prior, prior_valid, carried_earned, ids, thetas, trans, cur_g, prev_g,
-                grid.cell, self._next_id, cam, self._memory.changed())
+                grid.cell, self._next_id, cam, changed)
             earned = earned | held
             for i in self._setdown.pending:
                 self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)

@@ -94,6 +94,14 @@ def test_identify_clusters_ids_births_and_tentative():
     _, ids, born, _ = identify_clusters(cluster, np.zeros(rows * cols), prior, evidence,
                                         (rows, cols), 11, set(), **opts)
     assert list(ids) == [7] and born == set() and not calls
+    # a MotionBit born last frame that moves but whose flow explains nothing (a body
+    # tumbling in 3D) stands where most of it looks new where it stands, not otherwise
+    moving = np.where(cluster == 1, 2.0, disp)
+    for novel, kept in ((np.zeros(rows * cols, bool), []), (cluster == 1, [7])):
+        _, ids, _, _ = identify_clusters(
+            cluster, moving, prior, lambda: np.zeros(rows * cols), (rows, cols), 11, {7},
+            novel=lambda: novel, **opts)
+        assert [i for i in ids if i == 7] == kept
 
 
 def test_retire_drops_a_motionbit_whose_pixels_did_not_move():
