@@ -365,6 +365,8 @@ class MotionBitsSegmenter:
                                                                cfg.camera_tolerance),
                 cur_g, pulled, win)[ix[:, 1], ix[:, 0]] * (
                     1.0 if epipolar is None else ~epipolar))
+            # where something other than the static world last seen there stands now (a
+            # newborn tumbling block, a body set down): evidence that no 2D motion gives
             changed = self._memory.changed()
             novel = None if changed is None else cache(lambda: changed[ix[:, 1], ix[:, 0]])
             first_new, unconfirmed = self._next_id, self._tentative
