@@ -108,9 +108,9 @@ def drop_seen_still(labels: np.ndarray, prior: np.ndarray, still_seen: np.ndarra
     if not first_moved or top == 1:
         return labels
     first = np.full(top, np.iinfo(np.int32).max, np.int64)  # never moved: never dropped
-    for i, frame in first_moved.items():
-        if i < top:
-            first[i] = frame
+    ids = np.fromiter(first_moved.keys(), np.int64, len(first_moved))
+    frames = np.fromiter(first_moved.values(), np.int64, len(first_moved))
+    first[ids[ids < top]] = frames[ids < top]
     places = ((labels != prior) & (still_seen > first[labels])).view(np.uint8)
     square = np.ones((DROP_WIDTH, DROP_WIDTH), np.uint8)
     labels[cv2.morphologyEx(places, cv2.MORPH_OPEN, square) > 0] = 0
