@@ -163,7 +163,7 @@ class MotionBitGroups:
 
     def __init__(self, agree: float, disagree: float) -> None:
         self.agree_tol, self.disagree_tol = agree, disagree
-        self._agree: set[tuple[int, int]] = set()
+        self._agree: dict[tuple[int, int], int] = {}  # frames seen agreeing
         self._disagree: set[tuple[int, int]] = set()
         self._strikes: dict[tuple[int, int], int] = {}  # frames seen beyond ``disagree``
 
@@ -177,7 +177,7 @@ class MotionBitGroups:
             if b != a:
                 key = self._key(int(a), int(b))
                 self._disagree.add(key)
-                self._agree.discard(key)
+                self._agree.pop(key, None)
 
     def known(self, a: int, b: int) -> bool:
         return self._key(a, b) in self._disagree
@@ -192,21 +192,22 @@ class MotionBitGroups:
             self._strikes[key] = self._strikes.get(key, 0) + 1
             if self._strikes[key] >= DISAGREE_FRAMES or excess > AT_ONCE * self.disagree_tol:
                 self._disagree.add(key)
-                self._agree.discard(key)
+                self._agree.pop(key, None)
                 del self._strikes[key]
         elif excess <= self.agree_tol:
-            self._agree.add(key)
+            self._agree[key] = self._agree.get(key, 0) + 1
 
     def representatives(self, ids) -> dict[int, int]:
         """id -> the oldest (smallest) id of its group, for ``ids`` present now. Groups are
         connected components of "agreed once, never disagreed" among present ids, kept only
-        if no two members disagree (otherwise the group falls back to its agreeing pairs
-        joined greedily from the oldest id)."""
+        if no two members disagree; otherwise the group falls back to its agreeing pairs
+        joined greedily, the pairs seen agreeing at the most frames first: a piece that
+        agreed with two MotionBits that disagree joins the one it agreed with more often."""
         ids = sorted(int(i) for i in ids)
         present = set(ids)
         rep = {i: i for i in ids}
         members: dict[int, set[int]] = {i: {i} for i in ids}
-        for a, b in sorted(self._agree):
+        for a, b in sorted(self._agree, key=lambda key: (-self._agree[key], key)):
             if a not in present or b not in present:
                 continue
             ra, rb = rep[a], rep[b]

@@ -287,3 +287,24 @@ def test_overhangs_of_several_bodies_onto_one_flat_table_are_all_trimmed():
         assert (out[body] == i + 1).all()
         spill = (labels == i + 1) & (ndimage.distance_transform_edt(~body) > 4)
         assert not (out[spill] > 0).any(), i
+
+
+def test_a_flat_face_mostly_inside_its_mask_is_completed_a_half_one_is_not():
+    """A flat body whose mask has gaps (its flow read no motion in patches) gets the gaps;
+    one whose mask covers only half of it is not grown: half is no evidence that the
+    rest moved, and the flat table around a body is never taken."""
+    rgb = np.full((240, 320, 3), (225, 225, 220), np.uint8)  # a flat white table
+    rgb[40:200, 30:70] = (120, 40, 160)  # a long flat purple link
+    rgb[40:120, 200:240] = (40, 160, 40)  # a flat green body
+    labels = np.zeros((240, 320), np.int32)
+    labels[40:200, 30:70] = 1
+    labels[60:80, 30:50] = 0  # gaps reaching the link's outline: no hole to fill
+    labels[150:175, 45:70] = 0
+    labels[40:80, 200:240] = 2  # half of the green body
+    labels[200:210, 30:70] = 1  # and a little spill of the link onto the table
+    out = trim_flat_background(labels, rgb)
+    assert (out[44:196, 34:66] == 1).all()  # all but the link's outline (not flat)
+    assert (out[40:120, 200:240] == 2).sum() == (labels == 2).sum()
+    table = rgb[..., 1] == 225
+    far = ndimage.distance_transform_edt(table) > 4  # beyond the bodies' outlines
+    assert not out[far].any()  # nothing of the table, the spill trimmed

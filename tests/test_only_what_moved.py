@@ -91,6 +91,21 @@ def test_groups_agree_disagree_and_oldest_id():
     assert rep[3] != rep[8]
 
 
+def test_a_piece_joins_the_group_it_agreed_with_most_often():
+    """MotionBit 4 agreed once with 2 (a hand) and at three frames with 3 (the rest of
+    the door the hand pushes); 2 and 3 disagree: 4 goes with 3, not with the older 2."""
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    groups.observe(2, 4, 0.5)
+    for _ in range(3):
+        groups.observe(3, 4, 0.5)
+    groups.forbid(2, [3])
+    assert groups.representatives([2, 3, 4]) == {2: 2, 3: 3, 4: 3}
+    groups.observe(2, 4, 0.5)
+    groups.observe(2, 4, 0.5)
+    groups.observe(2, 4, 0.5)  # now more often with 2
+    assert groups.representatives([2, 3, 4]) == {2: 2, 3: 3, 4: 2}
+
+
 def test_groups_disagree_at_two_frames_not_one():
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     groups.observe(1, 2, 0.5)  # agree
