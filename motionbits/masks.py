@@ -301,9 +301,8 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     if face.any():
         owner = np.zeros(len(area), np.int32)  # region -> the mask it belongs to (0: none)
         owner[region[face]] = label[face]
-        owner_map = owner[regions]
-        take = (out == 0) & (owner_map > 0)
-        out[take] = owner_map[take]
+        background = out == 0
+        out[background] = owner[regions[background]]
     return out
 
 
