@@ -14,6 +14,10 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   other was moving (background counts as a label in the paper: a point that moved and
   one that did not are never one rigid body -- this keeps a pushed block apart from the
   gripper that pushes it);
+- a MotionBit born out of the pixels of one MotionBit (a piece its cluster split off) is a
+  piece of that body: it disagrees with every MotionBit its parent disagrees with (a
+  pushed drawer, kept apart from the gripper since it was born, comes apart into pieces
+  as the flow on its flat front changes; each piece stays apart from the gripper);
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final; a group that loses a member splits again.
 
@@ -179,6 +183,11 @@ class MotionBitGroups:
                 self._disagree.add(key)
                 self._agree.pop(key, None)
 
+    def inherit(self, child: int, parent: int) -> None:
+        """``child``, a piece of ``parent``, is another body than each one ``parent`` is."""
+        self.forbid(child, [b if a == parent else a for a, b in self._disagree
+                            if parent in (a, b)])
+
     def known(self, a: int, b: int) -> bool:
         return self._key(a, b) in self._disagree
 
@@ -253,7 +262,7 @@ def stillness_visible(labels: np.ndarray, a: int, box: tuple[slice, slice], moti
 def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray,
                      node_ids: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                      trans: np.ndarray, moving: set[int], first_new: int,
-                     still_before: np.ndarray, back_points: np.ndarray,
+                     still_before: np.ndarray, carried: np.ndarray, back_points: np.ndarray,
                      reliability: np.ndarray, cur: np.ndarray, prev: np.ndarray, *,
                      disagree: float, first_moved: dict[int, int]) -> None:
     """Record in ``groups`` this frame's evidence on every pair of touching MotionBits.
@@ -265,6 +274,8 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     part of the gripper that the masks missed while it moved is). Stillness seen before
     the older MotionBit moved tells nothing about the two: an arm's upper part, slow
     near the shoulder, reads as standing still while the whole arm starts moving.
+    A MotionBit born now of which more than ``BORN_FRESH`` of the nodes carried one older
+    MotionBit's label inherits that one's disagreements (:meth:`MotionBitGroups.inherit`).
     Otherwise, where either has a motion this frame, one affine motion is fitted to the
     nodes of both and :func:`union_excess` is observed -- a member without motion stands
     still (``STILL``), which can show that they differ, never that they agree.
@@ -280,6 +291,7 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
         first_new: ids from this one on were born now.
         still_before: (n,) int, 1 + the last earlier frame at which each node was seen
             standing still (:func:`seen_still`), 0 where never or once in a MotionBit.
+        carried: (n,) int, the MotionBit id each node carried from the last frame (0: none).
         back_points: (n, 2) each node's backward target relative to the camera.
         reliability: (n,) flow reliability of each node.
         cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
@@ -289,6 +301,11 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
     reach = int(np.ceil(max(grid.cell)))
     newborn = {int(i) for i in ids[ids >= first_new]}
+    for x in newborn:
+        parents = np.bincount(carried[node_ids == x], minlength=1)
+        parents[0] = 0
+        if parents.max() > BORN_FRESH * (node_ids == x).sum():
+            groups.inherit(x, int(parents.argmax()))
     boxes = cache(lambda: label_boxes(labels))  # once, if a pair asks
     for a, b in touching_pairs(labels, reach=reach):
         if groups.known(a, b):

@@ -418,8 +418,9 @@ class MotionBitsSegmenter:
             # when each node never in a MotionBit was last seen standing still (+1; 0: never)
             still_before = np.where(hist_nodes == 0, still_seen[ix[:, 1], ix[:, 0]], 0)
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
-                             first_new, still_before, back_pts, reliability, cur_g, prev_g,
-                             disagree=cfg.merge_disagree, first_moved=self._spans.first)
+                             first_new, still_before, prior_nodes, back_pts, reliability,
+                             cur_g, prev_g, disagree=cfg.merge_disagree,
+                             first_moved=self._spans.first)
             before = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,

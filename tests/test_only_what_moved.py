@@ -162,11 +162,40 @@ def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(last_still, st
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     still_before = np.where(node_ids == 2, last_still, 0)  # 1 + last frame seen still
     observe_touching(groups, grid, labels, node_ids, np.array([1, 2]), np.zeros(2),
-                     np.array([[-3.0, 0.0], [-3.0, 0.0]]), {1, 2}, 2, still_before, back,
-                     np.ones(grid.n), cur, prev, disagree=6.0, first_moved={1: 4, 2: 8})
+                     np.array([[-3.0, 0.0], [-3.0, 0.0]]), {1, 2}, 2, still_before,
+                     np.zeros(grid.n, np.int64), back, np.ones(grid.n), cur, prev,
+                     disagree=6.0, first_moved={1: 4, 2: 8})
     assert groups.known(1, 2) == stood_still
     rep = groups.representatives([1, 2])
     assert (rep[2] == 1) != stood_still
+
+
+@pytest.mark.parametrize("share, apart", [(0.8, True), (0.3, False)])
+def test_a_piece_split_off_a_body_stays_apart_from_what_that_body_is_not(share, apart):
+    """MotionBit 3 (the gripper's motion, next to gripper 1) is born where MotionBit 2, a
+    drawer that disagrees with the gripper, stood at the last frame: born out of more than
+    half 2's pixels, it is a piece of the drawer and stays apart from the gripper however
+    well their motions agree; born mostly out of unlabelled pixels, it may join it."""
+    rng = np.random.default_rng(2)
+    h, w = 80, 120
+    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
+    cur = np.roll(prev, 3, axis=1)
+    grid = NodeGrid.build(h, w, 20, 5)
+    labels = np.zeros((h, w), np.int32)
+    labels[20:60, 20:60], labels[20:60, 60:100] = 1, 3
+    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
+    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    piece = np.flatnonzero(node_ids == 3)
+    carried = np.where(node_ids == 1, 1, 0)
+    carried[piece[:int(round(share * len(piece)))]] = 2
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    groups.forbid(2, [1])
+    observe_touching(groups, grid, labels, node_ids, np.array([1, 3]), np.zeros(2),
+                     np.array([[-3.0, 0.0], [-3.0, 0.0]]), {1, 3}, 3, np.zeros(grid.n, int),
+                     carried, grid.points - np.array([3.0, 0.0], np.float32), np.ones(grid.n),
+                     cur, prev, disagree=6.0, first_moved={1: 1, 2: 2, 3: 4})
+    assert groups.known(1, 3) == apart
+    assert (groups.representatives([1, 3])[3] == 1) != apart
 
 
 def test_static_memory_reveals_background_seen_again_after_it_was_covered():
