@@ -50,7 +50,8 @@ DISAGREE_FRAMES = 2
 AT_ONCE = 2.0
 #: A new MotionBit was born out of still pixels, as far as an older MotionBit can tell, when
 #: more than this share of its nodes came from pixels never in a MotionBit and seen standing
-#: still (:func:`seen_still`) since that MotionBit first moved.
+#: still (:func:`seen_still`) since that MotionBit first moved; and out of one MotionBit's
+#: pixels when more than this share of its nodes carried that MotionBit's label.
 BORN_FRESH = 0.5
 
 #: px (working resolution): :func:`drop_seen_still` leaves slivers thinner than this. On
@@ -184,7 +185,8 @@ class MotionBitGroups:
                 self._agree.pop(key, None)
 
     def inherit(self, child: int, parent: int) -> None:
-        """``child``, a piece of ``parent``, is another body than each one ``parent`` is."""
+        """``child``, a piece of ``parent``, disagrees with each MotionBit ``parent``
+        disagrees with."""
         self.forbid(child, [b if a == parent else a for a, b in self._disagree
                             if parent in (a, b)])
 
