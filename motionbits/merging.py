@@ -304,10 +304,9 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     reach = int(np.ceil(max(grid.cell)))
     newborn = {int(i) for i in ids[ids >= first_new]}
     for x in newborn:
-        parents = np.bincount(carried[node_ids == x], minlength=1)
-        parents[0] = 0
-        if parents.max() > BORN_FRESH * (node_ids == x).sum():
-            groups.inherit(x, int(parents.argmax()))
+        parents = np.bincount(carried[node_ids == x], minlength=1)  # its nodes' last ids
+        if parents[1:].sum() and parents[1:].max() > BORN_FRESH * parents.sum():
+            groups.inherit(x, int(parents[1:].argmax()) + 1)
     boxes = cache(lambda: label_boxes(labels))  # once, if a pair asks
     for a, b in touching_pairs(labels, reach=reach):
         if groups.known(a, b):
