@@ -214,7 +214,7 @@ class StaticMemory:
             self.label[np.isin(self.label, ids)] = 0
 
     def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
-               standing: np.ndarray, labels: np.ndarray) -> None:
+               standing: np.ndarray, labels: np.ndarray) -> np.ndarray | None:
         """Fold in the current frame (after :meth:`observe`; nothing if that returned
         None).
 
@@ -225,9 +225,13 @@ class StaticMemory:
                 (:func:`motionbits.merging.standing_still`).
             labels: (H, W) int32 this frame's MotionBit ids, remembered with the look of
                 the pixels seen still (for :meth:`restore`).
+
+        Returns:
+            (H, W) bool, the pixels seen still now (remembered), or None when the memory is
+            off.
         """
         if self._difference is None:
-            return
+            return None
         self.was_covered |= self._difference > self.covered
         calm = standing & (cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW))
                         < self.tolerance)
@@ -238,3 +242,4 @@ class StaticMemory:
         self.known |= calm
         self.was_covered &= ~calm
         self._difference = None
+        return calm

@@ -15,6 +15,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from motionbits.aperture import join_flat_regions
+from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
@@ -168,7 +169,7 @@ class MotionBitsSegmenter:
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         if self._work_size is None:  # sized at the stream's first frame (_start)
             self._labels = self._earned = self._still = self._joined = None
-            self._temporal = self._memory = None
+            self._temporal = self._memory = self._arrivals = None
             return
         hw, ww = self._work_size
         self._labels = np.zeros((hw, ww), np.int32)  # working-resolution labels
@@ -179,6 +180,8 @@ class MotionBitsSegmenter:
         self._joined = np.zeros((hw, ww), np.int32)  # id of the mask that joined it (aperture.py)
         self._memory = StaticMemory((hw, ww), self.config.reveal_tolerance,  # revealed.py
                                     self.config.reveal_covered)
+        self._arrivals = Arrivals((hw, ww), self.config.reveal_covered,  # arrivals.py
+                                  self.config.carry_tolerance)
 
     # ------------------------------------------------------------------ helpers
     @contextmanager
@@ -410,6 +413,16 @@ class MotionBitsSegmenter:
                 labels, prior, prior_valid, carried_earned, ids, thetas, trans, cur_g, prev_g,
                 grid.cell, self._next_id, cam, changed)
             earned = earned | held
+            # bodies that arrived out of their motion's sight (carried hidden under a
+            # gripper, knocked across in a frame): new at rest where the static world was
+            if cam is None:
+                labels, held, born, self._next_id = self._arrivals.place(
+                    labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell),
+                    moving, int(round(max(grid.cell))), self._next_id)
+                earned = earned | held
+                self._setdown.adopt(born, labels)
+            else:
+                self._arrivals.forget()
             for i in self._setdown.pending:
                 self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)
 
@@ -443,7 +456,9 @@ class MotionBitsSegmenter:
             self._labels = labels
             standing = standing_still(speed, reliable, cfg.move_threshold)
             self._still = seen_still(still_seen, standing, self.frame_index)
-            self._memory.update(cur, cur_g, prev_g, standing, labels)
+            calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
+            if calm is not None:
+                self._arrivals.update(cur, calm, labels)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g

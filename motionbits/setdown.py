@@ -203,6 +203,13 @@ class SetDown:
                 held[box][piece] = True
         return out, held, next_id
 
+    def adopt(self, pieces: dict[int, int], labels: np.ndarray) -> None:
+        """Take new MotionBits found otherwise (id -> the id they were left by) as pieces
+        set down at this frame: shown from the next frame, if they still stand there."""
+        for i, parent in pieces.items():
+            self.pending[i] = int(np.count_nonzero(labels == i))
+            self.parent[i] = parent
+
     def _came_with(self, lab: int, cur: np.ndarray, mask: np.ndarray,
                    cam: np.ndarray | None) -> tuple[float, float]:
         """Mean grey-level residuals (world, body) of the pixels ``mask`` of ``cur``

@@ -1,0 +1,221 @@
+"""Bodies that arrived out of their motion's sight: new at rest where the static world was (ours).
+
+:class:`motionbits.setdown.SetDown` finds a body that its carrier leaves behind while the
+body's pixels still carry the carrier's label. Often they do not: a gripper that carries
+a block from above hides it, and lifting away it reveals the block already at rest (no
+pixel of it ever held a label that moved with it); a block knocked across the table
+stops within a frame or two, before a MotionBit holds it. What is left is the evidence of
+background subtraction, gated by motion: where a MotionBit passed, something other than
+the static world seen there before now stands still. :class:`Arrivals` keeps, per pixel,
+the look of the static world where it was last seen still and *unlabelled*, and the id of
+the last MotionBit that covered the pixel since. A piece of the current frame arrived when
+
+- the static world was seen at its pixels before a MotionBit covered them, and they now
+  differ from it by more than ``covered`` grey levels (largest channel, 5x5 mean);
+- it stands still (mean ``|I_t - I_t-1|`` over 5x5 below ``rest``), holds no label, is
+  compact (an opening by one grid cell keeps it) and covers ``SETDOWN_CELLS`` grid cells;
+- it is not the static world under other light: a cast shadow, or the end of one, keeps
+  the colour (median change of chromaticity below ``LIGHT_CHROMA``) and, after one gain,
+  the texture (mean residual below ``LIGHT_RESIDUAL`` grey levels);
+- it does not look like what surrounds it (its mean colour differs from that of a ring of
+  unlabelled pixels around it by more than ``SURROUND_DIFFERENCE`` on some channel):
+  background that a body uncovered where the memory saw only that body (a body at rest
+  from the first frame, then moved away) continues the surface around it.
+
+A piece next to the MotionBit that last covered it, while that MotionBit stands still, is
+the rest of that body and takes its id; any other becomes a new MotionBit, shown from the
+next frame if it still stands there (as SetDown's pieces). With a still camera only: the
+memory is forgotten whenever the camera moves.
+
+Measured on the pick-and-place track (README, "Bodies that arrived").
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
+
+__all__ = ["Arrivals", "Arrival", "LIGHT_CHROMA", "LIGHT_RESIDUAL", "SURROUND_DIFFERENCE"]
+
+#: px, side of the square over which differences are averaged.
+WINDOW = 5
+#: Largest median change of chromaticity (each channel over the sum of the three) of a
+#: piece that is the static world under other light ...
+LIGHT_CHROMA = 0.06
+#: ... where the remembered look times one gain (the median ratio of the brightness) also
+#: matches within this mean residual (grey levels).
+LIGHT_RESIDUAL = 12.0
+#: A piece whose mean colour is within this (grey levels, every channel) of its
+#: surroundings' continues the surface around it.
+SURROUND_DIFFERENCE = 15.0
+#: px, the ring of surroundings: between these distances from the piece.
+SURROUND_RING = (3, 10)
+#: Fewest surrounding pixels for that test (else it is not made).
+SURROUND_MIN = 20
+
+#: (rows, cols) slices of an image box, the (h, w) bool piece inside it, and the id of the
+#: MotionBit that last covered it.
+Arrival = tuple[tuple[slice, slice], np.ndarray, int]
+
+
+class Arrivals:
+    """The static world seen still and unlabelled, and what covered it since.
+
+    Each frame, :meth:`find` (before the label map is final) then :meth:`update`.
+
+    Args:
+        shape: (H, W) of the working frames.
+        covered: grey levels (largest channel, ``WINDOW`` mean) by which a pixel must
+            differ from the remembered static world (config ``reveal_covered``).
+        rest: grey levels; a pixel is at rest when its mean ``|I_t - I_t-1|`` is below this
+            (config ``carry_tolerance``).
+    """
+
+    def __init__(self, shape: tuple[int, int], covered: float, rest: float) -> None:
+        self.covered, self.rest = covered, rest
+        self.background = np.zeros((*shape, 3), np.uint8)  # remembered RGB
+        self.known = np.zeros(shape, bool)  # seen still and unlabelled at some frame
+        self.visited = np.zeros(shape, np.int32)  # last MotionBit over it since (0: none)
+        self._waiting = np.zeros(shape, bool)  # this frame's pieces still too small
+
+    def forget(self) -> None:
+        """Forget the memory (the camera moved)."""
+        self.known[:] = False
+        self.visited[:] = 0
+
+    def find(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
+             labels: np.ndarray, cell: tuple[float, float]) -> list[Arrival]:
+        """Pieces of the current frame that arrived (module docstring).
+
+        Args:
+            cur: (H, W, 3) uint8 current RGB frame.
+            cur_gray, prev_gray: (H, W) float32 grey frames.
+            labels: (H, W) int32 label map of this frame.
+            cell: (w, h) px of one grid cell.
+
+        Returns:
+            One :data:`Arrival` per piece, in no particular order.
+        """
+        self._waiting[:] = False
+        candidate = self.known & (self.visited > 0) & (labels == 0)
+        min_area = SETDOWN_CELLS * cell[0] * cell[1]
+        if not candidate.any():
+            return []
+        # everything below happens on the box of the candidates
+        # (grown by the window's reach, so that its means are the whole image's)
+        (h, w), r = labels.shape, WINDOW // 2
+        rows, cols = np.flatnonzero(candidate.any(axis=1)), np.flatnonzero(candidate.any(axis=0))
+        box = (slice(max(rows[0] - r, 0), min(rows[-1] + 1 + r, h)),
+               slice(max(cols[0] - r, 0), min(cols[-1] + 1 + r, w)))
+        changed = _colour_difference(cur[box], self.background[box]) > self.covered
+        still = cv2.blur(cv2.absdiff(cur_gray[box], prev_gray[box]), (WINDOW, WINDOW)) < self.rest
+        mask = (candidate[box] & changed & still).view(np.uint8)
+        side = max(1, int(round(COMPACT_CELLS * max(cell))))
+        n, comp, stats, _ = cv2.connectedComponentsWithStats(
+            cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((side, side), np.uint8)),
+            connectivity=8)
+        # a body uncovered a strip at a time grows a frame at a time: pieces too small or
+        # too thin yet are not taken into the static world
+        self._waiting[box] = mask > 0
+        found = []
+        for k in range(1, n):
+            if stats[k, cv2.CC_STAT_AREA] < min_area:
+                continue
+            x, y, w, h = stats[k, :4]
+            piece = comp[y:y + h, x:x + w] == k
+            at = (slice(box[0].start + y, box[0].start + y + h),
+                  slice(box[1].start + x, box[1].start + x + w))
+            self._waiting[at][piece] = False
+            if (_relit(cur[at], self.background[at], piece)
+                    or _like_surroundings(cur, labels, at, piece)):
+                continue
+            parent = int(np.bincount(self.visited[at][piece]).argmax())
+            found.append((at, piece, parent))
+        return found
+
+    def place(self, labels: np.ndarray, arrivals: list[Arrival], moving: set[int], reach: int,
+              next_id: int) -> tuple[np.ndarray, np.ndarray, dict[int, int], int]:
+        """Put the pieces into the label map: a piece within ``reach`` px of the MotionBit
+        that last covered it, while that MotionBit stands still, takes its id (the rest of
+        that body); any other takes a new id.
+
+        Args:
+            labels: (H, W) int32 label map of this frame; changed in place.
+            arrivals: from :meth:`find`.
+            moving: ids of the MotionBits that move now.
+            reach: px.
+            next_id: the id the next new MotionBit gets.
+
+        Returns:
+            ``labels``, the (H, W) bool pixels placed (their ``earned`` map), the new ids
+            -> the id that last covered them, and the next ``next_id``.
+        """
+        held = np.zeros(labels.shape, bool)
+        born: dict[int, int] = {}
+        h, w = labels.shape
+        for box, piece, parent in arrivals:
+            near = labels[max(box[0].start - reach, 0):min(box[0].stop + reach, h),
+                          max(box[1].start - reach, 0):min(box[1].stop + reach, w)]
+            if parent not in moving and (near == parent).any():
+                new = parent
+            else:
+                new, next_id = next_id, next_id + 1
+                born[new] = parent
+            labels[box][piece] = new
+            held[box][piece] = True
+        return labels, held, born, next_id
+
+    def update(self, cur: np.ndarray, calm: np.ndarray, labels: np.ndarray) -> None:
+        """Fold in the current frame.
+
+        Args:
+            cur: (H, W, 3) uint8 current RGB frame.
+            calm: (H, W) bool, seen standing still now (:meth:`StaticMemory.update`).
+            labels: (H, W) int32 this frame's MotionBit ids.
+        """
+        free = calm & (labels == 0) & ~self._waiting
+        cv2.copyTo(cur, free.view(np.uint8), self.background)  # in place
+        self.known |= free
+        self.visited[free] = 0
+        covered = labels > 0
+        self.visited[covered] = labels[covered]
+
+
+def _colour_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(h, w) uint8 ``WINDOW``-mean absolute difference of two (h, w, 3) uint8 images, the
+    largest over the channels."""
+    r, g, b_ = cv2.split(cv2.blur(cv2.absdiff(a, b), (WINDOW, WINDOW)))
+    return cv2.max(cv2.max(r, g), b_)
+
+
+def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
+    """Whether the (h, w) bool ``piece`` of (h, w, 3) uint8 ``now`` is ``then`` under other
+    light: the same chromaticity and, after one gain, the same grey levels."""
+    now, then = now[piece].astype(np.float32), then[piece].astype(np.float32)  # (n, 3)
+    sum_now, sum_then = now.sum(axis=1), then.sum(axis=1)
+    chroma = np.abs(now / (sum_now[:, None] + 1) - then / (sum_then[:, None] + 1)).max(axis=1)
+    gain = np.median((sum_now + 8) / (sum_then + 8))
+    residual = np.abs(sum_now - gain * sum_then).mean() / 3
+    return bool(np.median(chroma) < LIGHT_CHROMA and residual < LIGHT_RESIDUAL)
+
+
+def _like_surroundings(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, slice],
+                       piece: np.ndarray) -> bool:
+    """Whether the mean colour of ``piece`` (bool, in the image box ``box``) is within
+    ``SURROUND_DIFFERENCE`` of that of the unlabelled ring ``SURROUND_RING`` around it."""
+    h, w = labels.shape
+    near, far = SURROUND_RING
+    y0, y1 = max(box[0].start - far, 0), min(box[0].stop + far, h)
+    x0, x1 = max(box[1].start - far, 0), min(box[1].stop + far, w)
+    grown = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    grown[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0] = piece
+    outer = cv2.dilate(grown, np.ones((2 * far + 1, 2 * far + 1), np.uint8))
+    inner = cv2.dilate(grown, np.ones((2 * near + 1, 2 * near + 1), np.uint8))
+    ring = (outer > inner) & (labels[y0:y1, x0:x1] == 0)
+    if ring.sum() < SURROUND_MIN:
+        return False
+    around = cur[y0:y1, x0:x1][ring].mean(axis=0)
+    inside = cur[box][piece].mean(axis=0)
+    return bool(np.abs(inside - around).max() < SURROUND_DIFFERENCE)

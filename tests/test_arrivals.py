@@ -1,0 +1,129 @@
+"""Bodies that arrived out of their motion's sight keep a MotionBit (issue "Only what moved":
+pick-and-place). A gripper that carries a block from above hides it; lifting away, it
+reveals the block at rest, whose pixels never moved under a label of their own."""
+
+import cv2
+import numpy as np
+import pytest
+
+from motionbits import MotionBitsConfig, segment_video
+from motionbits.arrivals import Arrivals
+from motionbits.synth.planar import Body, Polygon, render_planar_clip
+
+SIZE = (240, 320)
+CONFIG = MotionBitsConfig(n_nodes=2500, max_side=max(SIZE))
+CELL = (6.4, 4.8)  # px of a grid cell: SETDOWN_CELLS of them is ~250 px
+COVERED, REST = 20.0, 12.0
+BLOCK = slice(40, 70), slice(50, 80)  # 30 x 30 px
+
+
+def _table(seed: int = 0) -> np.ndarray:
+    """(120, 160, 3) uint8 a grey table with a fine, faint texture."""
+    rng = np.random.default_rng(seed)
+    grey = 120 + rng.normal(0, 6, (120, 160)).clip(-15, 15)
+    return np.repeat(grey[..., None], 3, axis=2).astype(np.uint8)
+
+
+def _gray(rgb: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
+
+
+def _memory_after_a_pass(background: np.ndarray, parent: int = 7) -> Arrivals:
+    """Arrivals that saw ``background`` still and unlabelled, then a MotionBit ``parent``
+    cover the block's place."""
+    memory = Arrivals(background.shape[:2], COVERED, REST)
+    labels = np.zeros(background.shape[:2], np.int32)
+    memory.update(background, np.ones(labels.shape, bool), labels)
+    labels[BLOCK] = parent
+    memory.update(background, np.zeros(labels.shape, bool), labels)
+    return memory
+
+
+def _find(memory: Arrivals, frame: np.ndarray, labels: np.ndarray | None = None):
+    labels = np.zeros(frame.shape[:2], np.int32) if labels is None else labels
+    return memory.find(frame, _gray(frame), _gray(frame), labels, CELL)
+
+
+def test_a_body_at_rest_where_the_table_was_is_found_with_the_motionbit_that_covered_it():
+    table = _table()
+    memory = _memory_after_a_pass(table)
+    now = table.copy()
+    now[BLOCK] = (190, 50, 40)  # a red block stands there now, at rest
+    (box, piece, parent), = _find(memory, now)
+    found = np.zeros(table.shape[:2], bool)
+    found[box] = piece
+    assert parent == 7
+    assert found[BLOCK].mean() > 0.9 and found.sum() < 1.1 * 900
+    # nothing where no MotionBit passed: the same block elsewhere is the static world
+    elsewhere = table.copy()
+    elsewhere[80:110, 100:130] = (190, 50, 40)
+    assert _find(_memory_after_a_pass(table), elsewhere) == []
+
+
+def test_a_shadow_left_behind_is_not_an_arrival():
+    table = _table()
+    now = table.copy()
+    now[BLOCK] = (now[BLOCK] * 0.5).astype(np.uint8)  # the same texture, darker
+    assert _find(_memory_after_a_pass(table), now) == []
+
+
+def test_background_uncovered_where_a_body_stood_is_not_an_arrival():
+    """The memory saw only a body at its place (it stood there from the first frame);
+    it moved away and uncovered the table, which continues the table around it."""
+    table = _table()
+    before = table.copy()
+    before[BLOCK] = (40, 60, 190)
+    assert _find(_memory_after_a_pass(before), table) == []
+
+
+def test_a_body_uncovered_a_strip_at_a_time_is_found_once_large_enough():
+    table = _table()
+    memory = _memory_after_a_pass(table)
+    now = table.copy()
+    now[BLOCK[0], 50:57] = (190, 50, 40)  # 30 x 7 px: below the minimum area
+    assert _find(memory, now) == []
+    # not taken into the static world while it waits (the carrier still hides the rest) ...
+    labels = np.zeros(now.shape[:2], np.int32)
+    labels[BLOCK[0], 57:80] = 7
+    memory.update(now, np.ones(now.shape[:2], bool), labels)
+    now[BLOCK] = (190, 50, 40)  # ... so the whole block is found when it is uncovered
+    (box, piece, _), = _find(memory, now)
+    assert piece.sum() > 0.9 * 900
+
+
+@pytest.mark.parametrize("moving, expected", [(set(), 7), ({7}, 8)])
+def test_a_piece_next_to_its_standing_motionbit_joins_it(moving, expected):
+    table = _table()
+    memory = _memory_after_a_pass(table)
+    now = table.copy()
+    now[BLOCK] = (190, 50, 40)
+    labels = np.zeros(table.shape[:2], np.int32)
+    labels[40:70, 80:90] = 7  # the rest of MotionBit 7, right next to the piece
+    labels, held, born, next_id = memory.place(labels, _find(memory, now, labels), moving,
+                                               reach=6, next_id=8)
+    assert (labels[BLOCK] == expected).mean() > 0.9 and held[BLOCK].mean() > 0.9
+    assert born == ({} if expected == 7 else {8: 7}) and next_id == (8 if expected == 7 else 9)
+
+
+def _hidden_carry(seed: int):
+    """A carrier moves 12 px/frame from frame 2 on, a block under it (hidden) until frame
+    7, when the block stops and the carrier moves on, uncovering it; a static distractor."""
+    block = Polygon.rect(70, 100, 100, 130, texture_seed=3)
+    carrier = Polygon.rect(40, 85, 110, 145, texture_seed=5)
+    bodies = [Body((block,), velocity=(12.0, 0.0), start=2, stop=7),
+              Body((carrier,), velocity=(12.0, 0.0), start=2),
+              Body((Polygon.regular(260, 200, 22, 5, texture_seed=8),))]
+    return render_planar_clip(bodies, size=SIZE, n_frames=16, seed=seed)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_block_carried_hidden_gets_a_motionbit_of_its_own_once_uncovered(seed):
+    clip = _hidden_carry(seed)
+    last, gt = list(segment_video(clip.frames, CONFIG))[-1], clip.labels[-1]
+    block, carrier = gt == 1, gt == 2
+    ids, counts = np.unique(last.labels[block], return_counts=True)
+    counts[ids == 0] = 0
+    mine = ids[np.argmax(counts)]
+    assert mine > 0 and counts.max() >= 0.25 * block.sum(), (ids, counts)
+    assert (last.labels[carrier] == mine).mean() < 0.05  # not the carrier's MotionBit
+    assert not {mb.id: mb for mb in last.motionbits}[mine].moving
