@@ -24,8 +24,8 @@ the last MotionBit that covered the pixel since. A piece of the current frame ar
 
 A piece next to the MotionBit that last covered it, while that MotionBit stands still, is
 the rest of that body and takes its id; any other becomes a new MotionBit, shown from the
-next frame if it still stands there (as SetDown's pieces). With a still camera only: the
-memory is forgotten whenever the camera moves.
+next frame if it still stands there (as SetDown's pieces). Under a moving camera the
+memory follows the static world's model (homography and parallax) before each search.
 
 Measured on the pick-and-place track (README, "Bodies that arrived").
 """
@@ -35,6 +35,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motionbits.revealed import KNOWN_WEIGHT
 from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
 
 __all__ = ["Arrivals", "Arrival", "LIGHT_CHROMA", "LIGHT_RESIDUAL", "SURROUND_DIFFERENCE"]
@@ -80,10 +81,20 @@ class Arrivals:
         self.visited = np.zeros(shape, np.int32)  # last MotionBit over it since (0: none)
         self._waiting = np.zeros(shape, bool)  # this frame's pieces still too small
 
-    def forget(self) -> None:
-        """Forget the memory (the camera moved)."""
-        self.known[:] = False
-        self.visited[:] = 0
+    def follow(self, world: np.ndarray) -> None:
+        """Carry the memory to the current frame of a moving camera, as
+        :meth:`StaticMemory.follow` does: each pixel takes what was remembered where its
+        static world was in the last frame (``world``, (H, W, 2) float32,
+        ``CameraMotion.world``); it is known only where all four pixels it is read from
+        were, and what has just come into view is unknown."""
+        known = cv2.remap(self.known.view(np.uint8).astype(np.float32), world, None,
+                          cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+        self.known = known > KNOWN_WEIGHT
+        self.background = cv2.remap(self.background, world, None, cv2.INTER_LINEAR,
+                                    borderMode=cv2.BORDER_REPLICATE)
+        self.visited = cv2.remap(self.visited.astype(np.float32), world, None,
+                                 cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
+                                 borderValue=0.0).astype(np.int32)
 
     def find(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
              labels: np.ndarray, cell: tuple[float, float]) -> list[Arrival]:

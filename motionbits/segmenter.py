@@ -415,14 +415,14 @@ class MotionBitsSegmenter:
             earned = earned | held
             # bodies that arrived out of their motion's sight (carried hidden under a
             # gripper, knocked across in a frame): new at rest where the static world was
-            if cam is None:
-                labels, held, born, self._next_id = self._arrivals.place(
-                    labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell),
-                    moving, int(round(max(grid.cell))), self._next_id)
-                earned = earned | held
-                self._setdown.adopt(born, labels)
-            else:
-                self._arrivals.forget()
+            # (under a moving camera the memory follows the static world's model first)
+            if world is not None:
+                self._arrivals.follow(world)
+            labels, held, born, self._next_id = self._arrivals.place(
+                labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell),
+                moving, int(round(max(grid.cell))), self._next_id)
+            earned = earned | held
+            self._setdown.adopt(born, labels)
             for i in self._setdown.pending:
                 self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)
 

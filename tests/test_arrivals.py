@@ -105,6 +105,26 @@ def test_a_piece_next_to_its_standing_motionbit_joins_it(moving, expected):
     assert born == ({} if expected == 7 else {8: 7}) and next_id == (8 if expected == 7 else 9)
 
 
+def test_the_memory_follows_a_moving_camera():
+    """The camera pans 6 px to the right: the whole image moves 6 px left. The block found
+    is where it stands in the new frame, and the table seen again is not an arrival."""
+    table = _table()
+    memory = _memory_after_a_pass(table)
+    h, w = table.shape[:2]
+    xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    world = np.dstack([xs + 6, ys])  # where each pixel's static world was in the last frame
+    memory.follow(world)
+    moved = np.roll(table, -6, axis=1)
+    assert _find(memory, moved) == []
+    now = moved.copy()
+    now[BLOCK[0], 44:74] = (190, 50, 40)  # the block's place, 6 px further left now
+    (box, piece, parent), = _find(memory, now)
+    found = np.zeros((h, w), bool)
+    found[box] = piece
+    assert parent == 7 and found[BLOCK[0], 44:74].mean() > 0.9
+    assert not found[:, -6:].any()  # just come into view: unknown
+
+
 def _hidden_carry(seed: int):
     """A carrier moves 12 px/frame from frame 2 on, a block under it (hidden) until frame
     7, when the block stops and the carrier moves on, uncovering it; a static distractor."""
