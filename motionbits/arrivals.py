@@ -26,6 +26,8 @@ A piece next to the MotionBit that last covered it, while that MotionBit stands 
 the rest of that body and takes its id; any other becomes a new MotionBit, shown from the
 next frame if it still stands there (as SetDown's pieces). Under a moving camera the
 memory follows the static world's model (homography and parallax) before each search.
+It is folded in with :class:`motionbits.revealed.StaticMemory`'s pixels seen still, so it
+is off when that memory is (config ``reveal_tolerance`` = 0).
 
 Measured on the pick-and-place track (README, "Bodies that arrived").
 """
@@ -35,13 +37,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.revealed import KNOWN_WEIGHT
+from motionbits.revealed import KNOWN_WEIGHT, WINDOW, _color_difference
 from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
 
 __all__ = ["Arrivals", "Arrival", "LIGHT_CHROMA", "LIGHT_RESIDUAL", "SURROUND_DIFFERENCE"]
 
-#: px, side of the square over which differences are averaged.
-WINDOW = 5
 #: Largest median change of chromaticity (each channel over the sum of the three) of a
 #: piece that is the static world under other light ...
 LIGHT_CHROMA = 0.06
@@ -111,16 +111,16 @@ class Arrivals:
         """
         self._waiting[:] = False
         candidate = self.known & (self.visited > 0) & (labels == 0)
-        min_area = SETDOWN_CELLS * cell[0] * cell[1]
         if not candidate.any():
             return []
+        min_area = SETDOWN_CELLS * cell[0] * cell[1]
         # everything below happens on the box of the candidates
         # (grown by the window's reach, so that its means are the whole image's)
         (h, w), r = labels.shape, WINDOW // 2
         rows, cols = np.flatnonzero(candidate.any(axis=1)), np.flatnonzero(candidate.any(axis=0))
         box = (slice(max(rows[0] - r, 0), min(rows[-1] + 1 + r, h)),
                slice(max(cols[0] - r, 0), min(cols[-1] + 1 + r, w)))
-        changed = _colour_difference(cur[box], self.background[box]) > self.covered
+        changed = _color_difference(cur[box], self.background[box]) > self.covered
         still = cv2.blur(cv2.absdiff(cur_gray[box], prev_gray[box]), (WINDOW, WINDOW)) < self.rest
         mask = (candidate[box] & changed & still).view(np.uint8)
         side = max(1, int(round(COMPACT_CELLS * max(cell))))
@@ -192,13 +192,6 @@ class Arrivals:
         self.visited[free] = 0
         covered = labels > 0
         self.visited[covered] = labels[covered]
-
-
-def _colour_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(h, w) uint8 ``WINDOW``-mean absolute difference of two (h, w, 3) uint8 images, the
-    largest over the channels."""
-    r, g, b_ = cv2.split(cv2.blur(cv2.absdiff(a, b), (WINDOW, WINDOW)))
-    return cv2.max(cv2.max(r, g), b_)
 
 
 def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
