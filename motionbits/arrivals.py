@@ -37,6 +37,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motionbits.boxes import grow_box
 from motionbits.revealed import KNOWN_WEIGHT, WINDOW, _color_difference
 from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
 
@@ -116,20 +117,21 @@ class Arrivals:
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
         # everything below happens on the box of the candidates
         # (grown by the window's reach, so that its means are the whole image's)
-        (h, w), r = labels.shape, WINDOW // 2
         rows, cols = np.flatnonzero(candidate.any(axis=1)), np.flatnonzero(candidate.any(axis=0))
-        box = (slice(max(rows[0] - r, 0), min(rows[-1] + 1 + r, h)),
-               slice(max(cols[0] - r, 0), min(cols[-1] + 1 + r, w)))
+        box = grow_box((slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)),
+                       WINDOW // 2, labels.shape)
         changed = _color_difference(cur[box], self.background[box]) > self.covered
         still = cv2.blur(cv2.absdiff(cur_gray[box], prev_gray[box]), (WINDOW, WINDOW)) < self.rest
         mask = (candidate[box] & changed & still).view(np.uint8)
+        # a body uncovered a strip at a time grows a frame at a time: pieces too small or
+        # too thin yet are not taken into the static world
+        self._waiting[box] = mask > 0
+        if cv2.countNonZero(mask) < min_area:  # no piece can be large enough
+            return []
         side = max(1, int(round(COMPACT_CELLS * max(cell))))
         n, comp, stats, _ = cv2.connectedComponentsWithStats(
             cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((side, side), np.uint8)),
             connectivity=8)
-        # a body uncovered a strip at a time grows a frame at a time: pieces too small or
-        # too thin yet are not taken into the static world
-        self._waiting[box] = mask > 0
         found = []
         for k in range(1, n):
             if stats[k, cv2.CC_STAT_AREA] < min_area:
@@ -165,10 +167,8 @@ class Arrivals:
         """
         held = np.zeros(labels.shape, bool)
         born: dict[int, int] = {}
-        h, w = labels.shape
         for box, piece, parent in arrivals:
-            near = labels[max(box[0].start - reach, 0):min(box[0].stop + reach, h),
-                          max(box[1].start - reach, 0):min(box[1].stop + reach, w)]
+            near = labels[grow_box(box, reach, labels.shape)]
             if parent not in moving and (near == parent).any():
                 new = parent
             else:
@@ -187,11 +187,11 @@ class Arrivals:
             labels: (H, W) int32 this frame's MotionBit ids.
         """
         free = calm & (labels == 0) & ~self._waiting
-        cv2.copyTo(cur, free.view(np.uint8), self.background)  # in place
+        # in place (boolean-mask assignment is several times slower)
+        cv2.copyTo(cur, free.view(np.uint8), self.background)
         self.known |= free
-        self.visited[free] = 0
-        covered = labels > 0
-        self.visited[covered] = labels[covered]
+        self.visited *= ~free
+        cv2.copyTo(labels, (labels > 0).view(np.uint8), self.visited)
 
 
 def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
@@ -209,17 +209,16 @@ def _like_surroundings(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, sl
                        piece: np.ndarray) -> bool:
     """Whether the mean colour of ``piece`` (bool, in the image box ``box``) is within
     ``SURROUND_DIFFERENCE`` of that of the unlabelled ring ``SURROUND_RING`` around it."""
-    h, w = labels.shape
     near, far = SURROUND_RING
-    y0, y1 = max(box[0].start - far, 0), min(box[0].stop + far, h)
-    x0, x1 = max(box[1].start - far, 0), min(box[1].stop + far, w)
-    grown = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    around_box = grow_box(box, far, labels.shape)
+    y0, x0 = around_box[0].start, around_box[1].start
+    grown = np.zeros(labels[around_box].shape, np.uint8)
     grown[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0] = piece
     outer = cv2.dilate(grown, np.ones((2 * far + 1, 2 * far + 1), np.uint8))
     inner = cv2.dilate(grown, np.ones((2 * near + 1, 2 * near + 1), np.uint8))
-    ring = (outer > inner) & (labels[y0:y1, x0:x1] == 0)
+    ring = (outer > inner) & (labels[around_box] == 0)
     if ring.sum() < SURROUND_MIN:
         return False
-    around = cur[y0:y1, x0:x1][ring].mean(axis=0)
+    around = cur[around_box][ring].mean(axis=0)
     inside = cur[box][piece].mean(axis=0)
     return bool(np.abs(inside - around).max() < SURROUND_DIFFERENCE)

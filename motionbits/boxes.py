@@ -6,7 +6,15 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["label_boxes"]
+__all__ = ["grow_box", "label_boxes"]
+
+
+def grow_box(box: tuple[slice, slice], reach: int, shape: tuple[int, ...]
+             ) -> tuple[slice, slice]:
+    """The image box ``box`` (rows, cols) grown by ``reach`` px on every side, clipped to
+    an image of ``shape`` (H, W, ...)."""
+    return (slice(max(box[0].start - reach, 0), min(box[0].stop + reach, shape[0])),
+            slice(max(box[1].start - reach, 0), min(box[1].stop + reach, shape[1])))
 
 
 def label_boxes(label_map: np.ndarray, max_label: int = 0) -> list[tuple[slice, slice] | None]:

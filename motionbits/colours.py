@@ -13,7 +13,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import grow_box, label_boxes
 
 __all__ = ["snap_to_colours", "colour_codes", "COLOUR_BINS", "COLOUR_SMOOTH",
            "MIN_COLOUR_SAMPLES", "MIN_KEPT"]
@@ -59,7 +59,6 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
     """
     if band < 1 or not label_map.any():
         return label_map
-    h, w = label_map.shape
     codes = colour_codes(rgb)
     reach = 2 * band + 2
     out = label_map.copy()
@@ -67,8 +66,7 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
     for i, box in enumerate(label_boxes(label_map)):
         if box is None:
             continue
-        rows = slice(max(box[0].start - reach, 0), min(box[0].stop + reach, h))
-        cols = slice(max(box[1].start - reach, 0), min(box[1].stop + reach, w))
+        rows, cols = grow_box(box, reach, label_map.shape)
         labels, code = label_map[rows, cols], codes[rows, cols]
         mask = (labels == i + 1).astype(np.uint8)
         # distances (px) to the mask from outside and to the background from inside: the

@@ -22,6 +22,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motionbits.boxes import grow_box
 from motionbits.flow import sample_maps
 
 __all__ = ["pull_back", "gradient_magnitude", "appearance_consistent", "motion_gain",
@@ -131,10 +132,8 @@ def photometric_residual(cur: np.ndarray, prev: np.ndarray, motion: np.ndarray,
     (2, 3) backward map ``motion`` (``out(p) = prev(motion [p; 1])``), over a ``window``
     square, on the image box ``box``; the box is grown by the window radius (clipped to the
     image) so that the result is the whole-image one, cropped."""
-    h, w = cur.shape
-    r = window // 2
-    y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
-    x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
+    rows, cols = grow_box(box, window // 2, cur.shape)
+    y0, y1, x0, x1 = rows.start, rows.stop, cols.start, cols.stop
     m = motion.astype(np.float64).copy()
     m[:, 2] += m[:, 0] * x0 + m[:, 1] * y0  # output origin moved to (x0, y0)
     warped = cv2.warpAffine(prev, m.astype(np.float32), (x1 - x0, y1 - y0),

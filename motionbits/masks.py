@@ -14,7 +14,7 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.aperture import flat_regions
-from motionbits.boxes import label_boxes
+from motionbits.boxes import grow_box, label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
@@ -324,15 +324,13 @@ def hide_edgeless(label_map: np.ndarray, gradient: np.ndarray) -> np.ndarray:
     Returns:
         (H, W) int32 label map (``label_map`` itself if nothing is hidden).
     """
-    h, w = label_map.shape
     r = OUTLINE_BAND + 1
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * OUTLINE_BAND + 1,) * 2)
     edgeless = []
     for i, box in enumerate(label_boxes(label_map)):
         if box is None:
             continue
-        grown = (slice(max(box[0].start - r, 0), min(box[0].stop + r, h)),
-                 slice(max(box[1].start - r, 0), min(box[1].stop + r, w)))
+        grown = grow_box(box, r, label_map.shape)
         mask = (label_map[grown] == i + 1).astype(np.uint8)
         outline = (cv2.dilate(mask, disk) > 0) & (cv2.erode(mask, disk) == 0)
         if np.quantile(gradient[grown][outline], OUTLINE_QUANTILE) < EDGELESS_GRADIENT:

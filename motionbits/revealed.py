@@ -31,6 +31,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motionbits.boxes import grow_box
+
 __all__ = ["StaticMemory"]
 
 #: px, side of the square over which grey-level differences are averaged.
@@ -163,11 +165,8 @@ class StaticMemory:
         if self._difference is None or self._camera_moved:
             return None
         # grown by the windows' reach, so that the answer is the whole image's, cropped
-        h, w = self.known.shape
-        r = SHADOW_WINDOW // 2 + WINDOW // 2
-        y0, y1 = max(box[0].start - r, 0), min(box[0].stop + r, h)
-        x0, x1 = max(box[1].start - r, 0), min(box[1].stop + r, w)
-        grown = slice(y0, y1), slice(x0, x1)
+        grown = grow_box(box, SHADOW_WINDOW // 2 + WINDOW // 2, self.known.shape)
+        y0, x0 = grown[0].start, grown[1].start
         inner = (slice(box[0].start - y0, box[0].stop - y0),
                  slice(box[1].start - x0, box[1].stop - x0))
         now = cur[grown].astype(np.float32)

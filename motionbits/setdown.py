@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from motionbits.boxes import grow_box
 from motionbits.evidence import photometric_residual
 from motionbits.merging import STILL
 from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
@@ -227,13 +228,12 @@ class SetDown:
     def _neighbour(self, labels: np.ndarray, box: tuple[slice, slice], piece: np.ndarray,
                    parent: int, reach: int) -> int | None:
         """An earlier piece of the same ``parent`` that ``piece`` touches, if any."""
-        h, w = labels.shape
-        y0, y1 = max(box[0].start - reach, 0), min(box[0].stop + reach, h)
-        x0, x1 = max(box[1].start - reach, 0), min(box[1].stop + reach, w)
-        grown = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        around = grow_box(box, reach, labels.shape)
+        y0, x0 = around[0].start, around[1].start
+        grown = np.zeros(labels[around].shape, np.uint8)
         grown[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0] = piece
         grown = cv2.dilate(grown, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
-        near = np.unique(labels[y0:y1, x0:x1][grown])
+        near = np.unique(labels[around][grown])
         same = [int(i) for i in near if self.parent.get(int(i)) == parent]
         return min(same) if same else None
 

@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import grow_box, label_boxes
 from motionbits.nodes import binary_fill_holes
 
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
@@ -298,9 +298,8 @@ def _refine_in_box(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: np.ndarr
                    margin: int) -> tuple[float, np.ndarray]:
     """:func:`refine_rigid_motion` of the pixels ``labels == lab``, all inside ``box`` (their
     bounding box); only the box grown by ``margin`` is read."""
-    h, w = labels.shape
-    y0, y1 = max(box[0].start - margin, 0), min(box[0].stop + margin, h)
-    x0, x1 = max(box[1].start - margin, 0), min(box[1].stop + margin, w)
+    rows, cols = grow_box(box, margin, labels.shape)
+    y0, y1, x0, x1 = rows.start, rows.stop, cols.start, cols.stop
     mask = labels[y0:y1, x0:x1] == lab
     if np.count_nonzero(mask) < 16:
         return theta, np.asarray(t, np.float64)
