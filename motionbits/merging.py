@@ -14,6 +14,11 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   other was moving (background counts as a label in the paper: a point that moved and
   one that did not are never one rigid body -- this keeps a pushed block apart from the
   gripper that pushes it);
+- a MotionBit born out of pixels seen standing still while the other moved, where the
+  other's motion would not have shown on them (a flat laptop lid beside the hand that
+  pushes it), is *doubtful* with it: they may still agree, but of two groups that a
+  piece agreed with as often, it joins the one it agreed with without doubt (the lid's
+  piece goes with the lid's other pieces, not with the older hand);
 - a MotionBit born out of the pixels of one MotionBit (a piece its cluster split off) is a
   piece of that body: it disagrees with every MotionBit its parent disagrees with (a
   pushed drawer, kept apart from the gripper since it was born, comes apart into pieces
@@ -171,6 +176,7 @@ class MotionBitGroups:
         self._agree: dict[tuple[int, int], int] = {}  # frames seen agreeing
         self._disagree: set[tuple[int, int]] = set()
         self._strikes: dict[tuple[int, int], int] = {}  # frames seen beyond ``disagree``
+        self._doubt: set[tuple[int, int]] = set()  # born still beside the other's motion
 
     @staticmethod
     def _key(a: int, b: int) -> tuple[int, int]:
@@ -189,6 +195,11 @@ class MotionBitGroups:
         disagrees with."""
         self.forbid(child, [b if a == parent else a for a, b in self._disagree
                             if parent in (a, b)])
+
+    def doubt(self, a: int, b: int) -> None:
+        """``a`` was born out of pixels seen standing still while ``b`` moved, where that
+        could not be seen: their agreements rank after as many of an undoubted pair."""
+        self._doubt.add(self._key(int(a), int(b)))
 
     def known(self, a: int, b: int) -> bool:
         return self._key(a, b) in self._disagree
@@ -212,13 +223,15 @@ class MotionBitGroups:
         """id -> the oldest (smallest) id of its group, for ``ids`` present now. Groups are
         connected components of "agreed once, never disagreed" among present ids, kept only
         if no two members disagree; otherwise the group falls back to its agreeing pairs
-        joined greedily, the pairs seen agreeing at the most frames first: a piece that
-        agreed with two MotionBits that disagree joins the one it agreed with more often."""
+        joined greedily, the pairs seen agreeing at the most frames first, undoubted pairs
+        (:meth:`doubt`) before doubtful ones: a piece that agreed with two MotionBits that
+        disagree joins the one it agreed with more often, or without doubt."""
         ids = sorted(int(i) for i in ids)
         present = set(ids)
         rep = {i: i for i in ids}
         members: dict[int, set[int]] = {i: {i} for i in ids}
-        for a, b in sorted(self._agree, key=lambda key: (-self._agree[key], key)):
+        for a, b in sorted(self._agree,
+                           key=lambda key: (-self._agree[key], key in self._doubt, key)):
             if a not in present or b not in present:
                 continue
             ra, rb = rep[a], rep[b]
@@ -273,9 +286,11 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     a moving older MotionBit moved (``BORN_FRESH`` of its nodes, seen still at or after
     the older one's first moving frame), where the older one's motion would have shown,
     are different bodies for good (the pushed block is not the gripper that pushes it; a
-    part of the gripper that the masks missed while it moved is). Stillness seen before
-    the older MotionBit moved tells nothing about the two: an arm's upper part, slow
-    near the shoulder, reads as standing still while the whole arm starts moving.
+    part of the gripper that the masks missed while it moved is); where the older one's
+    motion would not have shown, the pair is doubtful (:meth:`MotionBitGroups.doubt`).
+    Stillness seen before the older MotionBit moved tells nothing about the two: an arm's
+    upper part, slow near the shoulder, reads as standing still while the whole arm
+    starts moving.
     A MotionBit born now of which more than ``BORN_FRESH`` of the nodes carried one older
     MotionBit's label inherits that one's disagreements (:meth:`MotionBitGroups.inherit`).
     Otherwise, where either has a motion this frame, one affine motion is fitted to the
@@ -313,9 +328,11 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
             continue
         for x, y in ((a, b), (b, a)):
             if (x in newborn and y < first_new and y in own and y in moving
-                    and np.mean(still_before > first_moved[y], where=node_ids == x) > BORN_FRESH
-                    and stillness_visible(labels, x, boxes()[x - 1], own[y], cur) > disagree):
-                groups.forbid(x, [y])
+                    and np.mean(still_before > first_moved[y], where=node_ids == x) > BORN_FRESH):
+                if stillness_visible(labels, x, boxes()[x - 1], own[y], cur) > disagree:
+                    groups.forbid(x, [y])
+                else:
+                    groups.doubt(x, y)
         if groups.known(a, b) or (a not in own and b not in own):
             continue
         sel = (node_ids == a) | (node_ids == b)

@@ -106,6 +106,23 @@ def test_a_piece_joins_the_group_it_agreed_with_most_often():
     assert groups.representatives([2, 3, 4]) == {2: 2, 3: 3, 4: 2}
 
 
+def test_a_piece_joins_the_group_it_agreed_with_without_doubt():
+    """MotionBit 4 (a piece of a flat lid) agreed as often with 1 (the hand that pushes
+    the lid) as with 3 (the lid's other piece); 1 and 3 disagree. 4 was born out of
+    pixels seen standing still while 1 moved, where that could not be seen: it goes with
+    3. Without the doubt the tie goes to the older 1."""
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    for _ in range(3):
+        groups.observe(1, 4, 0.5)
+        groups.observe(3, 4, 0.5)
+    groups.forbid(1, [3])
+    assert groups.representatives([1, 3, 4]) == {1: 1, 3: 3, 4: 1}
+    groups.doubt(4, 1)
+    assert groups.representatives([1, 3, 4]) == {1: 1, 3: 3, 4: 3}
+    groups.forbid(3, [4])  # with the lid ruled out, the doubtful pair still joins
+    assert groups.representatives([1, 3, 4]) == {1: 1, 3: 3, 4: 1}
+
+
 def test_groups_disagree_at_two_frames_not_one():
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     groups.observe(1, 2, 0.5)  # agree
