@@ -33,9 +33,14 @@ IDENTITY = np.eye(3)
 #: A moving MotionBit more than this share of whose pixels show the static world under a
 #: shadow is a moving cast shadow, not a body ...
 SHADOW_SHARE = 0.3
-#: ... if it first moved at most this many frames ago: an older one has shown it is a body
-#: (a body pushed in the agent's shadow looks like one).
+#: ... if it first moved at most this many frames ago; an older one has shown it is a body
+#: (a body pushed in the agent's shadow looks like one) unless more than
+#: ``OLD_SHADOW_SHARE`` of it shows that: a shadow that stood where the memory never saw
+#: the static world lit (the arm's shadow on the wall at the first frame) reads as a
+#: shadow only once it has moved onto wall seen lit. On seeds 0 and 11 (70 + 60 robot /
+#: hand scenes) an arm's dark link read up to 0.38, wall shadows 0.5-0.6.
 SHADOW_AGE = 5
+OLD_SHADOW_SHARE = 0.5
 
 
 @dataclass
@@ -179,13 +184,14 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     """``labels`` without the MotionBits that are moving cast shadows: MotionBits moving
     now, since at most ``SHADOW_AGE`` frames, more than ``SHADOW_SHARE`` of whose pixels
     show the static world as ``memory`` remembers it, only darker, with its colour and
-    texture (:meth:`StaticMemory.shadowed`).
+    texture (:meth:`StaticMemory.shadowed`); older ones, more than ``OLD_SHADOW_SHARE``.
 
     An arm's shadow sweeping a table moves its edges, and the flow follows them; what is
     under it is the table, dimmed. A body that moves onto the table replaces its colour
     or its texture (a flat, darker grey on a flat grey table would pass for a shadow). A
-    body that stands still under a passing shadow does not move, and one that has moved
-    for longer has shown it is a body: neither is tested.
+    body that stands still under a passing shadow does not move (it is not tested), and
+    one that has moved for longer has shown it is a body (it must look shadowed over more
+    of its pixels).
 
     Args:
         labels: (H, W) int32 label map of this frame.
@@ -198,15 +204,19 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     Returns:
         (H, W) int32 label map (``labels`` itself when nothing is retired).
     """
-    young = [i for i in moving if frame_index - first_moved.get(i, frame_index) <= SHADOW_AGE]
-    if not young:
+    if not moving:
         return labels
-    boxes = label_boxes(labels, max_label=max(young))
-    young = [i for i in young if boxes[i - 1] is not None]
-    if not young:
+    share = {i: SHADOW_SHARE if frame_index - first_moved.get(i, frame_index) <= SHADOW_AGE
+             else OLD_SHADOW_SHARE for i in moving}
+    boxes = label_boxes(labels, max_label=max(moving))
+    # an older one only if enough of it is darker at all (cheap; :meth:`shadowed` is not)
+    tested = [i for i in moving if boxes[i - 1] is not None and (
+        share[i] == SHADOW_SHARE
+        or memory.dimmed_share(cur, labels, i, boxes[i - 1]) > OLD_SHADOW_SHARE)]
+    if not tested:
         return labels
-    # the box of the young MotionBits: each lies whole inside it
-    rows, cols = zip(*(boxes[i - 1] for i in young))
+    # the box of the tested MotionBits: each lies whole inside it
+    rows, cols = zip(*(boxes[i - 1] for i in tested))
     box = (slice(min(r.start for r in rows), max(r.stop for r in rows)),
            slice(min(c.start for c in cols), max(c.stop for c in cols)))
     shadow = memory.shadowed(cur, box)
@@ -215,5 +225,5 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     lab = labels[box]
     area = np.bincount(lab.ravel())
     dark = np.bincount(lab[shadow], minlength=len(area))
-    gone = [i for i in young if dark[i] > SHADOW_SHARE * area[i]]
+    gone = [i for i in tested if dark[i] > share[i] * area[i]]
     return drop_labels(labels, gone)

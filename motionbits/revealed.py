@@ -181,6 +181,33 @@ class StaticMemory:
                   & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
         return self.known[box] & shadow[inner]
 
+    def dimmed_share(self, cur: np.ndarray, labels: np.ndarray, lab: int,
+                     box: tuple[slice, slice]) -> float:
+        """Share of MotionBit ``lab``'s pixels (``labels == lab``, inside their bounding
+        ``box``) that are remembered and darker now by a shadow's gain (``SHADOW_GAIN``,
+        over a remembered grey sum above ``SHADOW_MIN_SUM``): a cheap first look, never
+        below the share that :meth:`shadowed` finds. 0 when :meth:`shadowed` would
+        return None.
+
+        Args:
+            cur: (H, W, 3) uint8 current RGB frame.
+            labels: (H, W) int label map.
+            lab: the MotionBit's id.
+            box: (rows, cols) slices of its bounding box.
+        """
+        if self._difference is None or self._camera_moved:
+            return 0.0
+        mask = labels[box] == lab
+        area = np.count_nonzero(mask)
+        mask &= self.known[box]
+        if not area or not mask.any():
+            return 0.0
+        now = cur[box][mask].sum(axis=1, dtype=np.float32)
+        then = self.color[box][mask].sum(axis=1, dtype=np.float32)
+        gain = (now + 8) / (then + 8)
+        return float(np.count_nonzero((then > SHADOW_MIN_SUM) & (gain > SHADOW_GAIN[0])
+                                      & (gain < SHADOW_GAIN[1]))) / area
+
     def restore(self, labels: np.ndarray, revealed: np.ndarray | None, moving: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray | None]:
         """Give the revealed pixels that were last seen still inside a MotionBit (a body

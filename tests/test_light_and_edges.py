@@ -10,7 +10,7 @@ from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import gradient_magnitude, static_residual
 from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import hide_edgeless, snap_to_edges, trim_flat_background
-from motionbits.retirement import SHADOW_AGE, retire_shadows
+from motionbits.retirement import OLD_SHADOW_SHARE, SHADOW_AGE, SHADOW_SHARE, retire_shadows
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
@@ -176,10 +176,20 @@ def test_young_moving_cast_shadows_are_retired_bodies_and_others_kept():
     np.testing.assert_array_equal(out[labels != 1], labels[labels != 1])
     assert set(np.unique(retire_shadows(labels, cur, memory, {1, 2, 3}, first_moved, 10))) == {0, 2}
     assert retire_shadows(labels, cur, memory, set(), first_moved, 10) is labels
-    # a MotionBit that has moved for more than SHADOW_AGE frames is a body
+    # a MotionBit that has moved for more than SHADOW_AGE frames is a shadow only if more
+    # than OLD_SHADOW_SHARE of it looks shadowed (a wall shadow seen lit only later) ...
     old = {1: 1, 2: 8, 3: 8}
     assert retire_shadows(labels, cur, memory, {1, 2}, old, 1 + SHADOW_AGE) is not labels
-    assert retire_shadows(labels, cur, memory, {1, 2}, old, 2 + SHADOW_AGE) is labels
+    assert set(np.unique(retire_shadows(labels, cur, memory, {1, 2}, old, 2 + SHADOW_AGE))) == {
+        0, 2, 3}
+    # ... one half on the shadow, half on the lit table is a body once it is older
+    half = np.zeros(SIZE, np.int32)
+    half[95:145, 75:110] = 1
+    half[95:145, 150:200] = 1
+    share = memory.shadowed(cur, (slice(0, SIZE[0]), slice(0, SIZE[1])))[half == 1].mean()
+    assert SHADOW_SHARE < share < OLD_SHADOW_SHARE
+    assert retire_shadows(half, cur, memory, {1}, old, 1 + SHADOW_AGE).max() == 0
+    assert retire_shadows(half, cur, memory, {1}, old, 2 + SHADOW_AGE) is half
 
 
 def test_a_moving_shadow_leaves_no_mark_of_its_own(monkeypatch):
