@@ -9,8 +9,8 @@ import motionbits.segmenter as segmenter_module
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
 from motionbits.masks import hide_small
-from motionbits.merging import (MotionBitGroups, drop_seen_still, observe_touching, seen_still,
-                                standing_still, touching_pairs)
+from motionbits.merging import (OUTWEIGH, MotionBitGroups, drop_seen_still, observe_touching,
+                                seen_still, standing_still, touching_pairs)
 from motionbits.nodes import NodeGrid
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -121,6 +121,31 @@ def test_a_piece_joins_the_group_it_agreed_with_without_doubt():
     assert groups.representatives([1, 3, 4]) == {1: 1, 3: 3, 4: 3}
     groups.forbid(3, [4])  # with the lid ruled out, the doubtful pair still joins
     assert groups.representatives([1, 3, 4]) == {1: 1, 3: 3, 4: 1}
+
+
+def test_agreement_across_groups_outweighs_one_disagreeing_pair_not_a_forbidden_one():
+    """Two pieces of an arm each (1 + 2, 3 + 4), 1 and 3 agreeing at 4 frames, 2 and 4
+    (small pieces read wrong) disagreeing: one group while the agreements across are at
+    least OUTWEIGH times the disagreeing pairs; a forbidden pair is never outweighed."""
+    def arm(across: int, forbid: bool) -> dict[int, int]:
+        groups = MotionBitGroups(agree=1.5, disagree=6.0)
+        for _ in range(6):
+            groups.observe(1, 2, 0.5)
+            groups.observe(3, 4, 0.5)
+        for _ in range(across):
+            groups.observe(1, 3, 0.5)
+        if forbid:
+            groups.forbid(2, [4])
+        else:
+            groups.observe(2, 4, 7.0)
+            groups.observe(2, 4, 7.0)
+        assert groups.known(2, 4)
+        return groups.representatives([1, 2, 3, 4])
+
+    assert OUTWEIGH <= 4
+    assert arm(4, forbid=False) == {1: 1, 2: 1, 3: 1, 4: 1}
+    assert arm(OUTWEIGH - 1, forbid=False) == {1: 1, 2: 1, 3: 3, 4: 3}
+    assert arm(4, forbid=True) == {1: 1, 2: 1, 3: 3, 4: 3}
 
 
 def test_groups_disagree_at_two_frames_not_one():
