@@ -33,13 +33,13 @@ IDENTITY = np.eye(3)
 #: A moving MotionBit more than this share of whose pixels show the static world under a
 #: shadow is a moving cast shadow, not a body ...
 SHADOW_SHARE = 0.3
-#: ... if it first moved at most this many frames ago; an older one has shown it is a body
-#: (a body pushed in the agent's shadow looks like one) unless more than
-#: ``OLD_SHADOW_SHARE`` of it shows that: a shadow that stood where the memory never saw
-#: the static world lit (the arm's shadow on the wall at the first frame) reads as a
-#: shadow only once it has moved onto wall seen lit. On seeds 0 and 11 (70 + 60 robot /
-#: hand scenes) an arm's dark link read up to 0.38, wall shadows 0.5-0.6.
+#: ... if it first moved at most this many frames ago: an older one has shown it is a body
+#: (a body pushed in the agent's shadow looks like one) ...
 SHADOW_AGE = 5
+#: ... unless more than this share of it shows a shadow: a shadow that stood where the
+#: memory never saw the static world lit (the arm's shadow on the wall at the first
+#: frame) reads as one only once it has moved onto wall seen lit. On seeds 0 and 11 (70 +
+#: 60 robot / hand scenes) an arm's dark link read up to 0.38, wall shadows 0.5-0.6.
 OLD_SHADOW_SHARE = 0.5
 
 
@@ -206,13 +206,12 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     """
     if not moving:
         return labels
-    share = {i: SHADOW_SHARE if frame_index - first_moved.get(i, frame_index) <= SHADOW_AGE
-             else OLD_SHADOW_SHARE for i in moving}
+    young = {i for i in moving if frame_index - first_moved.get(i, frame_index) <= SHADOW_AGE}
+    share = {i: SHADOW_SHARE if i in young else OLD_SHADOW_SHARE for i in moving}
     boxes = label_boxes(labels, max_label=max(moving))
     # an older one only if enough of it is darker at all (cheap; :meth:`shadowed` is not)
     tested = [i for i in moving if boxes[i - 1] is not None and (
-        share[i] == SHADOW_SHARE
-        or memory.dimmed_share(cur, labels, i, boxes[i - 1]) > OLD_SHADOW_SHARE)]
+        i in young or memory.dimmed_share(cur, labels, i, boxes[i - 1]) > OLD_SHADOW_SHARE)]
     if not tested:
         return labels
     # the box of the tested MotionBits: each lies whole inside it
