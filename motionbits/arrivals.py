@@ -38,7 +38,8 @@ import cv2
 import numpy as np
 
 from motionbits.boxes import grow_box
-from motionbits.revealed import KNOWN_WEIGHT, WINDOW, _color_difference
+from motionbits.revealed import (WINDOW, _color_difference, follow_ids, follow_known,
+                                 follow_look, light_change)
 from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
 
 __all__ = ["Arrivals", "Arrival", "LIGHT_CHROMA", "LIGHT_RESIDUAL", "SURROUND_DIFFERENCE"]
@@ -88,14 +89,9 @@ class Arrivals:
         static world was in the last frame (``world``, (H, W, 2) float32,
         ``CameraMotion.world``); it is known only where all four pixels it is read from
         were, and what has just come into view is unknown."""
-        known = cv2.remap(self.known.view(np.uint8).astype(np.float32), world, None,
-                          cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        self.known = known > KNOWN_WEIGHT
-        self.background = cv2.remap(self.background, world, None, cv2.INTER_LINEAR,
-                                    borderMode=cv2.BORDER_REPLICATE)
-        self.visited = cv2.remap(self.visited.astype(np.float32), world, None,
-                                 cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
-                                 borderValue=0.0).astype(np.int32)
+        self.known = follow_known(self.known, world)
+        self.background = follow_look(self.background, world)
+        self.visited = follow_ids(self.visited, world)
 
     def find(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
              labels: np.ndarray, cell: tuple[float, float]) -> list[Arrival]:
@@ -197,10 +193,8 @@ class Arrivals:
 def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
     """Whether the (h, w) bool ``piece`` of (h, w, 3) uint8 ``now`` is ``then`` under other
     light: the same chromaticity and, after one gain, the same grey levels."""
-    now, then = now[piece].astype(np.float32), then[piece].astype(np.float32)  # (n, 3)
-    sum_now, sum_then = now.sum(axis=1), then.sum(axis=1)
-    chroma = np.abs(now / (sum_now[:, None] + 1) - then / (sum_then[:, None] + 1)).max(axis=1)
-    gain = np.median((sum_now + 8) / (sum_then + 8))
+    chroma, gain, sum_now, sum_then = light_change(now[piece], then[piece])  # (n,) each
+    gain = np.median(gain)
     residual = np.abs(sum_now - gain * sum_then).mean() / 3
     return bool(np.median(chroma) < LIGHT_CHROMA and residual < LIGHT_RESIDUAL)
 

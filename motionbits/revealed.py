@@ -33,7 +33,7 @@ import numpy as np
 
 from motionbits.boxes import grow_box
 
-__all__ = ["StaticMemory"]
+__all__ = ["StaticMemory", "light_change", "follow_known", "follow_look", "follow_ids"]
 
 #: px, side of the square over which grey-level differences are averaged.
 WINDOW = 5
@@ -57,6 +57,38 @@ def _color_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     differs)."""
     r, g, b_ = cv2.split(cv2.blur(cv2.absdiff(a, b), (WINDOW, WINDOW)))
     return cv2.max(cv2.max(r, g), b_)
+
+
+def light_change(now: np.ndarray, then: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """How the colours ``then`` look as ``now`` -- each (..., 3) uint8 (or float32) --
+    differ as a change of light would: ``(chroma, gain, sum_now, sum_then)``, each
+    (...) float32, with ``chroma`` the largest change of chromaticity (each channel over
+    the sum of the three, +1) and ``gain`` the ratio of brightness (the sums, +8 each, so
+    that dark pixels do not explode)."""
+    now, then = now.astype(np.float32), then.astype(np.float32)
+    sum_now, sum_then = now.sum(axis=-1), then.sum(axis=-1)
+    chroma = np.abs(now / (sum_now[..., None] + 1) - then / (sum_then[..., None] + 1))
+    return chroma.max(axis=-1), (sum_now + 8) / (sum_then + 8), sum_now, sum_then
+
+
+def follow_known(known: np.ndarray, world: np.ndarray) -> np.ndarray:
+    """(H, W) bool ``known`` carried to the current frame of a moving camera (``world``:
+    (H, W, 2) float32, :func:`motionbits.camera.world_maps`): known only where all four
+    pixels it is read from were (``KNOWN_WEIGHT``); what has just come into view is not."""
+    return cv2.remap(known.astype(np.float32), world, None, cv2.INTER_LINEAR,
+                     borderMode=cv2.BORDER_CONSTANT, borderValue=0.0) > KNOWN_WEIGHT
+
+
+def follow_look(image: np.ndarray, world: np.ndarray) -> np.ndarray:
+    """An (H, W[, C]) remembered image carried along ``world``, bilinearly."""
+    return cv2.remap(image, world, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+def follow_ids(ids: np.ndarray, world: np.ndarray) -> np.ndarray:
+    """An (H, W) int32 map of ids carried along ``world`` (nearest; 0 off the frame)."""
+    return cv2.remap(ids.astype(np.float32), world, None, cv2.INTER_NEAREST,
+                     borderMode=cv2.BORDER_CONSTANT, borderValue=0.0).astype(np.int32)
 
 
 class StaticMemory:
@@ -131,17 +163,12 @@ class StaticMemory:
         known only where all four pixels it is read from are (no colour is mixed with an
         unknown one), was covered where most of them were; what has just come into view
         is unknown."""
-        known = cv2.remap(self.known.astype(np.float32), world, None, cv2.INTER_LINEAR,
-                          borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
         covered = cv2.remap(self.was_covered.astype(np.float32), world, None,
                             cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
-        self.color = cv2.remap(self.color, world, None, cv2.INTER_LINEAR,
-                               borderMode=cv2.BORDER_REPLICATE)
-        self.gray = cv2.remap(self.gray, world, None, cv2.INTER_LINEAR,
-                              borderMode=cv2.BORDER_REPLICATE)
-        self.label = cv2.remap(self.label.astype(np.float32), world, None, cv2.INTER_NEAREST,
-                               borderMode=cv2.BORDER_CONSTANT, borderValue=0.0).astype(np.int32)
-        self.known = known > KNOWN_WEIGHT
+        self.color = follow_look(self.color, world)
+        self.gray = follow_look(self.gray, world)
+        self.label = follow_ids(self.label, world)
+        self.known = follow_known(self.known, world)
         self.was_covered = covered > 0.5
 
     def shadowed(self, cur: np.ndarray, box: tuple[slice, slice]) -> np.ndarray | None:
@@ -169,15 +196,11 @@ class StaticMemory:
         y0, x0 = grown[0].start, grown[1].start
         inner = (slice(box[0].start - y0, box[0].stop - y0),
                  slice(box[1].start - x0, box[1].stop - x0))
-        now = cur[grown].astype(np.float32)
-        then = self.color[grown].astype(np.float32)
-        sum_now, sum_then = now.sum(axis=2), then.sum(axis=2)
-        chroma = np.abs(now / (sum_now[..., None] + 1) - then / (sum_then[..., None] + 1))
-        gain = (sum_now + 8) / (sum_then + 8)
+        chroma, gain, sum_now, sum_then = light_change(cur[grown], self.color[grown])
         # the texture under a shadow is the remembered one, dimmed by a smooth gain
         local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
         relit = cv2.blur(np.abs(sum_now - local * sum_then), (WINDOW, WINDOW)) / 3
-        shadow = ((sum_then > SHADOW_MIN_SUM) & (chroma.max(axis=2) < SHADOW_CHROMA)
+        shadow = ((sum_then > SHADOW_MIN_SUM) & (chroma < SHADOW_CHROMA)
                   & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
         return self.known[box] & shadow[inner]
 
@@ -202,9 +225,7 @@ class StaticMemory:
         mask &= self.known[box]
         if not area or not mask.any():
             return 0.0
-        now = cur[box][mask].sum(axis=1, dtype=np.float32)
-        then = self.color[box][mask].sum(axis=1, dtype=np.float32)
-        gain = (now + 8) / (then + 8)
+        _, gain, _, then = light_change(cur[box][mask], self.color[box][mask])
         return float(np.count_nonzero((then > SHADOW_MIN_SUM) & (gain > SHADOW_GAIN[0])
                                       & (gain < SHADOW_GAIN[1]))) / area
 
