@@ -422,7 +422,7 @@ class MotionBitsSegmenter:
             if world is not None:
                 self._arrivals.follow(world)
             labels, held, born, self._next_id = self._arrivals.place(
-                labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell),
+                labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving),
                 moving, int(round(max(grid.cell))), self._next_id)
             earned = earned | held
             self._setdown.adopt(born, labels)

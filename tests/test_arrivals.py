@@ -39,9 +39,10 @@ def _memory_after_a_pass(background: np.ndarray, parent: int = 7) -> Arrivals:
     return memory
 
 
-def _find(memory: Arrivals, frame: np.ndarray, labels: np.ndarray | None = None):
+def _find(memory: Arrivals, frame: np.ndarray, labels: np.ndarray | None = None,
+          moving: set[int] = frozenset()):
     labels = np.zeros(frame.shape[:2], np.int32) if labels is None else labels
-    return memory.find(frame, _gray(frame), _gray(frame), labels, CELL)
+    return memory.find(frame, _gray(frame), _gray(frame), labels, CELL, moving)
 
 
 def test_a_body_at_rest_where_the_table_was_is_found_with_the_motionbit_that_covered_it():
@@ -99,10 +100,38 @@ def test_a_piece_next_to_its_standing_motionbit_joins_it(moving, expected):
     now[BLOCK] = (190, 50, 40)
     labels = np.zeros(table.shape[:2], np.int32)
     labels[40:70, 80:90] = 7  # the rest of MotionBit 7, right next to the piece
-    labels, held, born, next_id = memory.place(labels, _find(memory, now, labels), moving,
-                                               reach=6, next_id=8)
+    labels, held, born, next_id = memory.place(labels, _find(memory, now, labels, moving),
+                                               moving, reach=6, next_id=8)
     assert (labels[BLOCK] == expected).mean() > 0.9 and held[BLOCK].mean() > 0.9
     assert born == ({} if expected == 7 else {8: 7}) and next_id == (8 if expected == 7 else 9)
+
+
+@pytest.mark.parametrize("seen, moving, joins", [
+    (900, set(), True),     # the rest of a body seen whole while carried
+    (900, {7}, False),      # beside a MotionBit that moves: not its rest
+    (300, set(), False),    # larger than the body was ever seen: not its rest
+])
+def test_the_rest_of_a_body_standing_beside_its_mark_joins_it(seen, moving, joins):
+    """A block set down is marked only on a third of it (where the carrier's motion
+    showed); the rest of it stands where the table was seen, where no MotionBit passed."""
+    table = _table()
+    memory = Arrivals(table.shape[:2], COVERED, REST)
+    labels = np.zeros(table.shape[:2], np.int32)
+    memory.update(table, np.ones(labels.shape, bool), labels)  # the table seen still
+    labels[80:110, 100:100 + seen // 30] = 7  # MotionBit 7 elsewhere, that large
+    memory.update(table, np.zeros(labels.shape, bool), labels)
+    now = table.copy()
+    now[BLOCK] = (190, 50, 40)  # the block stands there now, at rest
+    labels = np.zeros(table.shape[:2], np.int32)
+    labels[40:70, 50:60] = 7  # marked on its left third
+    found = _find(memory, now, labels, moving)
+    if not joins:
+        assert found == []
+        return
+    (box, piece, parent), = found
+    rest = np.zeros(table.shape[:2], bool)
+    rest[box] = piece
+    assert parent == 7 and rest[40:70, 60:80].mean() > 0.9 and rest.sum() < 1.2 * 600
 
 
 def test_the_memory_follows_a_moving_camera():
