@@ -62,6 +62,8 @@ SURROUND_DIFFERENCE = 15.0
 SURROUND_RING = (3, 10)
 #: Fewest surrounding pixels for that test (else it is not made).
 SURROUND_MIN = 20
+#: px: a piece within this of a MotionBit's pixels touches it.
+TOUCH = 2
 #: Grid cells around a MotionBit standing still within which the rest of its body is
 #: sought. Pick-and-place mIoU 42.4 -> 49.5, robot / hand 62.5 / 62.0 -> 64.0 / 62.9
 #: (round 17, README "Bodies that arrived").
@@ -159,7 +161,7 @@ class Arrivals:
             if (_relit(cur[at], self.background[at], piece)
                     or _like_surroundings(cur, labels, at, piece)):
                 continue
-            ring = labels[grow_box(at, 2, labels.shape)]
+            ring = _ring(labels, at, piece, TOUCH)
             beside = ring[standing[ring]]
             body = int(np.bincount(beside).argmax()) if beside.size else 0
             visited = self.visited[at][piece]
@@ -219,6 +221,19 @@ class Arrivals:
         areas = np.bincount(labels.ravel())
         self._largest = {int(i): max(self._largest.get(int(i), 0), int(areas[i]))
                          for i in np.flatnonzero(areas[1:]) + 1}
+
+
+def _ring(labels: np.ndarray, box: tuple[slice, slice], piece: np.ndarray, width: int
+          ) -> np.ndarray:
+    """(n,) int32 labels of the pixels within ``width`` px of ``piece`` (bool, in the image
+    box ``box``), outside it."""
+    around = grow_box(box, width, labels.shape)
+    y0, x0 = around[0].start, around[1].start
+    grown = np.zeros(labels[around].shape, np.uint8)
+    grown[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0] = piece
+    inside = grown > 0
+    grown = cv2.dilate(grown, np.ones((2 * width + 1, 2 * width + 1), np.uint8))
+    return labels[around][(grown > 0) & ~inside]
 
 
 def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:

@@ -106,12 +106,13 @@ def test_a_piece_next_to_its_standing_motionbit_joins_it(moving, expected):
     assert born == ({} if expected == 7 else {8: 7}) and next_id == (8 if expected == 7 else 9)
 
 
-@pytest.mark.parametrize("seen, moving, joins", [
-    (900, set(), True),     # the rest of a body seen whole while carried
-    (900, {7}, False),      # beside a MotionBit that moves: not its rest
-    (300, set(), False),    # larger than the body was ever seen: not its rest
+@pytest.mark.parametrize("seen, moving, gap, joins", [
+    (900, set(), 0, True),     # the rest of a body seen whole while carried
+    (900, {7}, 0, False),      # beside a MotionBit that moves: not its rest
+    (300, set(), 0, False),    # larger than the body was ever seen: not its rest
+    (900, set(), 6, False),    # near a MotionBit but not touching it: another body
 ])
-def test_the_rest_of_a_body_standing_beside_its_mark_joins_it(seen, moving, joins):
+def test_the_rest_of_a_body_standing_beside_its_mark_joins_it(seen, moving, gap, joins):
     """A block set down is marked only on a third of it (where the carrier's motion
     showed); the rest of it stands where the table was seen, where no MotionBit passed."""
     table = _table()
@@ -122,8 +123,9 @@ def test_the_rest_of_a_body_standing_beside_its_mark_joins_it(seen, moving, join
     memory.update(table, np.zeros(labels.shape, bool), labels)
     now = table.copy()
     now[BLOCK] = (190, 50, 40)  # the block stands there now, at rest
+    now[40:70, 60 - gap:60] = table[40:70, 60 - gap:60]
     labels = np.zeros(table.shape[:2], np.int32)
-    labels[40:70, 50:60] = 7  # marked on its left third
+    labels[40:70, 50:60 - gap] = 7  # marked on its left third
     found = _find(memory, now, labels, moving)
     if not joins:
         assert found == []
