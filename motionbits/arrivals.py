@@ -93,7 +93,7 @@ class Arrivals:
         self.known = np.zeros(shape, bool)  # seen still and unlabelled at some frame
         self.visited = np.zeros(shape, np.int32)  # last MotionBit over it since (0: none)
         self._waiting = np.zeros(shape, bool)  # this frame's pieces still too small
-        self._largest: dict[int, int] = {}  # present id -> its largest area so far (px)
+        self._largest: dict[int, int] = {}  # id present -> its largest area so far (px)
 
     def follow(self, world: np.ndarray) -> None:
         """Carry the memory to the current frame of a moving camera, as
@@ -125,10 +125,16 @@ class Arrivals:
         standing = areas > 0  # id -> it stands still now
         standing[0] = False
         standing[[i for i in moving if i < standing.size]] = False
-        reach = int(round(NEAR_CELLS * max(cell)))
-        near = cv2.dilate(standing[labels].view(np.uint8),
-                          np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
-        candidate = self.known & ((self.visited > 0) | near) & (labels == 0)
+        candidate = self.visited > 0
+        if standing.any():  # and around the MotionBits standing still (on their box)
+            reach = int(round(NEAR_CELLS * max(cell)))
+            still = standing[labels]
+            rows, cols = np.flatnonzero(still.any(axis=1)), np.flatnonzero(still.any(axis=0))
+            box = grow_box((slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)),
+                           reach, labels.shape)
+            candidate[box] |= cv2.dilate(still[box].view(np.uint8),
+                                         np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
+        candidate &= self.known & (labels == 0)
         if not candidate.any():
             return []
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
