@@ -121,8 +121,7 @@ class Arrivals:
             One :data:`Arrival` per piece, in no particular order.
         """
         self._waiting[:] = False
-        areas = np.bincount(labels.ravel())
-        standing = areas > 0  # id -> it stands still now
+        standing = np.bincount(labels.ravel()) > 0  # id -> it stands still now
         standing[0] = False
         standing[[i for i in moving if i < standing.size]] = False
         candidate = self.visited > 0
@@ -167,7 +166,8 @@ class Arrivals:
             if (_relit(cur[at], self.background[at], piece)
                     or _like_surroundings(cur, labels, at, piece)):
                 continue
-            ring = _ring(labels, at, piece, TOUCH)
+            around, ring = _ring(labels.shape, at, piece, 0, TOUCH)
+            ring = labels[around][ring]  # the labels it touches
             beside = ring[standing[ring]]
             body = int(np.bincount(beside).argmax()) if beside.size else 0
             visited = self.visited[at][piece]
@@ -229,17 +229,18 @@ class Arrivals:
                          for i in np.flatnonzero(areas[1:]) + 1}
 
 
-def _ring(labels: np.ndarray, box: tuple[slice, slice], piece: np.ndarray, width: int
-          ) -> np.ndarray:
-    """(n,) int32 labels of the pixels within ``width`` px of ``piece`` (bool, in the image
-    box ``box``), outside it."""
-    around = grow_box(box, width, labels.shape)
+def _ring(shape: tuple[int, ...], box: tuple[slice, slice], piece: np.ndarray, near: int,
+          far: int) -> tuple[tuple[slice, slice], np.ndarray]:
+    """The pixels more than ``near`` and at most ``far`` px from ``piece`` (bool, in the
+    image box ``box``; square distance) in an image of ``shape``: (image box, bool ring
+    inside it)."""
+    around = grow_box(box, far, shape)
     y0, x0 = around[0].start, around[1].start
-    grown = np.zeros(labels[around].shape, np.uint8)
+    grown = np.zeros((around[0].stop - y0, around[1].stop - x0), np.uint8)
     grown[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0] = piece
-    inside = grown > 0
-    grown = cv2.dilate(grown, np.ones((2 * width + 1, 2 * width + 1), np.uint8))
-    return labels[around][(grown > 0) & ~inside]
+    outer = cv2.dilate(grown, np.ones((2 * far + 1, 2 * far + 1), np.uint8))
+    inner = cv2.dilate(grown, np.ones((2 * near + 1, 2 * near + 1), np.uint8))
+    return around, outer > inner
 
 
 def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
@@ -255,14 +256,8 @@ def _like_surroundings(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, sl
                        piece: np.ndarray) -> bool:
     """Whether the mean colour of ``piece`` (bool, in the image box ``box``) is within
     ``SURROUND_DIFFERENCE`` of that of the unlabelled ring ``SURROUND_RING`` around it."""
-    near, far = SURROUND_RING
-    around_box = grow_box(box, far, labels.shape)
-    y0, x0 = around_box[0].start, around_box[1].start
-    grown = np.zeros(labels[around_box].shape, np.uint8)
-    grown[box[0].start - y0:box[0].stop - y0, box[1].start - x0:box[1].stop - x0] = piece
-    outer = cv2.dilate(grown, np.ones((2 * far + 1, 2 * far + 1), np.uint8))
-    inner = cv2.dilate(grown, np.ones((2 * near + 1, 2 * near + 1), np.uint8))
-    ring = (outer > inner) & (labels[around_box] == 0)
+    around_box, ring = _ring(labels.shape, box, piece, *SURROUND_RING)
+    ring &= labels[around_box] == 0
     if ring.sum() < SURROUND_MIN:
         return False
     around = cur[around_box][ring].mean(axis=0)
