@@ -15,7 +15,10 @@ A shown MotionBit is therefore extended over a flat image region (colour gradien
   band around it (its own edges) better than "nothing moved" by ``GAIN`` grey levels.
 
 Once joined it stays joined -- also when the body stops -- while it touches the MotionBit
-and the motion explains it no worse than "nothing moved" by ``KEEP_TOLERANCE``. Only the
+and the motion explains it no worse than "nothing moved" by ``KEEP_TOLERANCE``. A join is
+remembered under the group of the MotionBit that made it (:func:`carried_joins`): a
+newborn piece of an arm that joined its flat link is often merged into the arm's first
+MotionBit a frame later, and the link must stay with the arm. Only the
 masks shown are extended: the segmenter's state keeps the motion's masks (a joined region
 fed back into the clustering came back as a MotionBit of its own and split the body).
 """
@@ -29,7 +32,7 @@ from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
-__all__ = ["flat_regions", "join_flat_regions", "FLAT_GRADIENT", "MOVING_SHARE",
+__all__ = ["flat_regions", "join_flat_regions", "carried_joins", "FLAT_GRADIENT", "MOVING_SHARE",
            "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE"]
 
 #: grey levels per px: a pixel whose colour gradient (largest over R, G, B) is below this
@@ -158,3 +161,25 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                 sub = out[box]
                 sub[grown & (sub == 0) & (region | ~flat[box])] = lab
     return out
+
+
+def carried_joins(with_links: np.ndarray, labels: np.ndarray, group_of: dict[int, int]
+                  ) -> np.ndarray:
+    """The pixels :func:`join_flat_regions` added, each under the group of the MotionBit
+    that joined it, to be carried to the next frame as its ``joined``.
+
+    Args:
+        with_links: (H, W) int32 label map with the joined regions.
+        labels: (H, W) int32 label map before the join.
+        group_of: each present id -> its group's representative id (ids not in it keep
+            their own).
+
+    Returns:
+        (H, W) int32: the group's id on the joined pixels, 0 elsewhere.
+    """
+    lut = np.arange(int(max([with_links.max(initial=0), *group_of.keys(), 0])) + 1,
+                    dtype=np.int32)
+    for i, r in group_of.items():
+        if r:
+            lut[i] = r
+    return np.where(with_links != labels, lut[with_links], 0).astype(np.int32)

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from motionbits.aperture import join_flat_regions
+from motionbits.aperture import carried_joins, join_flat_regions
 from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
 from motionbits.camera import compensate_camera
@@ -447,6 +447,7 @@ class MotionBitsSegmenter:
             present = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
             self._memory.forget(np.setdiff1d(before, present))  # retired
             rep = self._groups.representatives(present)
+            group_of = dict(rep)  # each present id's group, shown or not
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown; a piece set down, once it still stands at the
             # next frame
@@ -476,7 +477,7 @@ class MotionBitsSegmenter:
             with_links = join_flat_regions(
                 labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
                 move_threshold=cfg.move_threshold, min_area=speck_area)
-            self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
+            self._joined = carried_joins(with_links, labels, group_of)
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
             # a mask is shown if its outline is an image edge (a mask left on a flat table

@@ -4,7 +4,7 @@ view from the top border, rigidly attached to a textured block, both moving down
 import cv2
 import numpy as np
 
-from motionbits.aperture import flat_regions, join_flat_regions
+from motionbits.aperture import carried_joins, flat_regions, join_flat_regions
 
 H, W = 160, 160
 BAR = (slice(None), slice(70, 86))  # columns of the flat bar
@@ -82,3 +82,20 @@ def test_a_joined_region_stays_while_the_body_rests():
     out = _join(rest, rest, moving=False, joined=joined)
     assert (out[0:70, 72:84] == 1).mean() > 0.95
     assert (_join(rest, rest, moving=False)[0:70, 72:84] == 0).all()  # never joined: no
+
+
+def test_a_join_stays_with_the_group_of_the_piece_that_made_it():
+    # a newborn piece (id 5) of the block's body joined the bar, then was merged into the
+    # block's group (id 1); at rest the next frame, only the block has a motion
+    rest = _scene(3)
+    made = np.zeros((H, W), np.int32)
+    made[72:103, 57:99] = 1
+    made[60:72, 57:99] = 5
+    with_links = made.copy()
+    with_links[0:60, 70:86] = 5
+    joined = carried_joins(with_links, made, {1: 1, 5: 1})
+    assert set(np.unique(joined)) == {0, 1} and (joined[0:60, 70:86] == 1).all()
+    assert (_join(rest, rest, moving=False, joined=joined)[0:70, 72:84] == 1).mean() > 0.95
+    # under the piece's own id, the join is lost once the piece is gone
+    alone = carried_joins(with_links, made, {})
+    assert (_join(rest, rest, moving=False, joined=alone)[0:70, 72:84] == 0).all()
