@@ -17,10 +17,12 @@ the last MotionBit that covered the pixel since. A piece of the current frame ar
 - it is not the static world under other light: a cast shadow, or the end of one, keeps
   the colour (median change of chromaticity below ``LIGHT_CHROMA``) and, after one gain,
   the texture (mean residual below ``LIGHT_RESIDUAL`` grey levels);
-- it does not look like what surrounds it (its mean colour differs from that of a ring of
-  unlabelled pixels around it by more than ``SURROUND_DIFFERENCE`` on some channel):
-  background that a body uncovered where the memory saw only that body (a body at rest
-  from the first frame, then moved away) continues the surface around it.
+- it is not background that a body uncovered where the memory saw only that body (a body
+  at rest from the first frame, then moved away): such a piece continues the surface
+  around it (its mean colour within ``SURROUND_DIFFERENCE`` on every channel of that of
+  a ring of unlabelled pixels around it) while what the memory saw there did not. Where
+  the memory saw the surface too, a piece that changed arrived even in the surface's
+  mean colour (a pale cube set down on veined marble).
 
 Pieces are sought where a MotionBit passed and, within ``NEAR_CELLS`` grid cells, around
 each MotionBit that stands still now. A piece beside a MotionBit that stands still, and
@@ -164,7 +166,7 @@ class Arrivals:
                   slice(box[1].start + x, box[1].start + x + w))
             self._waiting[at][piece] = False
             if (_relit(cur[at], self.background[at], piece)
-                    or _like_surroundings(cur, labels, at, piece)):
+                    or _like_surroundings(cur, labels, at, piece, self.background)):
                 continue
             around, ring = _ring(labels.shape, at, piece, 0, TOUCH)
             ring = labels[around][ring]  # the labels it touches
@@ -253,13 +255,18 @@ def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
 
 
 def _like_surroundings(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, slice],
-                       piece: np.ndarray) -> bool:
-    """Whether the mean colour of ``piece`` (bool, in the image box ``box``) is within
-    ``SURROUND_DIFFERENCE`` of that of the unlabelled ring ``SURROUND_RING`` around it."""
+                       piece: np.ndarray, remembered: np.ndarray) -> bool:
+    """Whether ``piece`` (bool, in the image box ``box``) is background that continues its
+    surroundings where the memory saw something else: its mean colour in ``cur`` is within
+    ``SURROUND_DIFFERENCE`` of that of the unlabelled ring ``SURROUND_RING`` around it,
+    and its mean colour in ``remembered`` ((H, W, 3) uint8, the static world seen) is
+    not."""
     around_box, ring = _ring(labels.shape, box, piece, *SURROUND_RING)
     ring &= labels[around_box] == 0
     if ring.sum() < SURROUND_MIN:
         return False
     around = cur[around_box][ring].mean(axis=0)
     inside = cur[box][piece].mean(axis=0)
-    return bool(np.abs(inside - around).max() < SURROUND_DIFFERENCE)
+    before = remembered[box][piece].mean(axis=0)
+    return bool(np.abs(inside - around).max() < SURROUND_DIFFERENCE
+                and np.abs(before - around).max() >= SURROUND_DIFFERENCE)

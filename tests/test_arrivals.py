@@ -77,6 +77,20 @@ def test_background_uncovered_where_a_body_stood_is_not_an_arrival():
     assert _find(_memory_after_a_pass(before), table) == []
 
 
+def test_a_body_in_the_tables_mean_colour_is_found_where_the_table_was_seen():
+    """A flat block on a veined table: it differs from the table seen at its place, but
+    its mean colour continues that of the table around it (as a pale cube set down on
+    marble). The memory saw the table there, not a body: it arrived."""
+    table = _table()
+    table[:, (np.arange(160) // 6) % 2 == 1] //= 2  # dark veins, 6 px wide
+    now = table.copy()
+    now[BLOCK] = table[BLOCK].reshape(-1, 3).mean(axis=0).astype(np.uint8)
+    (box, piece, parent), = _find(_memory_after_a_pass(table), now)
+    found = np.zeros(table.shape[:2], bool)
+    found[box] = piece
+    assert parent == 7 and found[BLOCK].mean() > 0.6
+
+
 def test_a_body_uncovered_a_strip_at_a_time_is_found_once_large_enough():
     table = _table()
     memory = _memory_after_a_pass(table)
