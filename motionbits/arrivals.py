@@ -22,7 +22,8 @@ the last MotionBit that covered the pixel since. A piece of the current frame ar
   around it (its mean colour within ``SURROUND_DIFFERENCE`` on every channel of that of
   a ring of unlabelled pixels around it) while what the memory saw there did not. Where
   the memory saw the surface too, a piece that changed arrived even in the surface's
-  mean colour (a pale cube set down on veined marble).
+  mean colour (a pale cube set down on veined marble) -- under a still camera: once the
+  memory has followed a moving camera, a piece like its surroundings never arrived.
 
 Pieces are sought where a MotionBit passed and, within ``NEAR_CELLS`` grid cells, around
 each MotionBit that stands still now. A piece beside a MotionBit that stands still, and
@@ -96,6 +97,7 @@ class Arrivals:
         self.visited = np.zeros(shape, np.int32)  # last MotionBit over it since (0: none)
         self._waiting = np.zeros(shape, bool)  # this frame's pieces still too small
         self._largest: dict[int, int] = {}  # id present -> its largest area so far (px)
+        self._followed = False  # carried along a moving camera's model at some frame
 
     def follow(self, world: np.ndarray) -> None:
         """Carry the memory to the current frame of a moving camera, as
@@ -103,6 +105,7 @@ class Arrivals:
         static world was in the last frame (``world``, (H, W, 2) float32,
         ``CameraMotion.world``); it is known only where all four pixels it is read from
         were, and what has just come into view is unknown."""
+        self._followed = True
         self.known = follow_known(self.known, world)
         self.background = follow_look(self.background, world)
         self.visited = follow_ids(self.visited, world)
@@ -166,7 +169,8 @@ class Arrivals:
                   slice(box[1].start + x, box[1].start + x + w))
             self._waiting[at][piece] = False
             if (_relit(cur[at], self.background[at], piece)
-                    or _like_surroundings(cur, labels, at, piece, self.background)):
+                    or _like_surroundings(cur, labels, at, piece,
+                                          None if self._followed else self.background)):
                 continue
             around, ring = _ring(labels.shape, at, piece, 0, TOUCH)
             ring = labels[around][ring]  # the labels it touches
@@ -255,18 +259,20 @@ def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
 
 
 def _like_surroundings(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, slice],
-                       piece: np.ndarray, remembered: np.ndarray) -> bool:
+                       piece: np.ndarray, remembered: np.ndarray | None) -> bool:
     """Whether ``piece`` (bool, in the image box ``box``) is background that continues its
     surroundings where the memory saw something else: its mean colour in ``cur`` is within
     ``SURROUND_DIFFERENCE`` of that of the unlabelled ring ``SURROUND_RING`` around it,
     and its mean colour in ``remembered`` ((H, W, 3) uint8, the static world seen) is
-    not."""
+    not (None: not asked -- a memory carried along a moving camera's model is misaligned
+    where the scene has depth, and a textured surface reads as changed there)."""
     around_box, ring = _ring(labels.shape, box, piece, *SURROUND_RING)
     ring &= labels[around_box] == 0
     if ring.sum() < SURROUND_MIN:
         return False
     around = cur[around_box][ring].mean(axis=0)
     inside = cur[box][piece].mean(axis=0)
-    before = remembered[box][piece].mean(axis=0)
-    return bool(np.abs(inside - around).max() < SURROUND_DIFFERENCE
-                and np.abs(before - around).max() >= SURROUND_DIFFERENCE)
+    if np.abs(inside - around).max() >= SURROUND_DIFFERENCE:
+        return False
+    return remembered is None or bool(
+        np.abs(remembered[box][piece].mean(axis=0) - around).max() >= SURROUND_DIFFERENCE)
