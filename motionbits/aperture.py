@@ -32,8 +32,8 @@ from motionbits.boxes import label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
-__all__ = ["flat_regions", "join_flat_regions", "carried_joins", "group_lut", "FLAT_GRADIENT",
-           "MOVING_SHARE", "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE"]
+__all__ = ["flat_regions", "join_flat_regions", "carried_joins", "FLAT_GRADIENT", "MOVING_SHARE",
+           "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE"]
 
 #: grey levels per px: a pixel whose colour gradient (largest over R, G, B) is below this
 #: is flat.
@@ -94,8 +94,8 @@ def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT
 def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                       trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
                       prev_gray: np.ndarray, still: np.ndarray, speed: np.ndarray,
-                      joined: np.ndarray, group_of: dict[int, int], *,
-                      move_threshold: float, min_area: int) -> np.ndarray:
+                      joined: np.ndarray, *, move_threshold: float, min_area: int
+                      ) -> np.ndarray:
     """The label map with flat links that move along themselves joined to their MotionBit.
 
     Args:
@@ -106,10 +106,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
         cur_gray, prev_gray: (H, W) float32 grey frames (``prev_gray`` camera-stabilised).
         still: (H, W) float32 grey levels by which "nothing moved" misses each pixel.
         speed: (H, W) float32 length of the backward flow relative to the camera.
-        joined: (H, W) int32 pixels joined at the last frame (their group's id,
-            :func:`carried_joins`), carried to this one.
-        group_of: each present id -> its group's representative id now: a region joined
-            under any member of a group stays with any member.
+        joined: (H, W) int32 pixels joined at the last frame (their id), carried to this one.
         move_threshold: px; a pixel's flow moves above this.
         min_area: px; smaller regions never join.
 
@@ -139,8 +136,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     reach = np.ones((2 * REACH + 1, 2 * REACH + 1), np.uint8)
     static = None
     boxes = label_boxes(labels)
-    group = group_lut(group_of, max(int(labels.max(initial=0)), int(joined.max(initial=0))))
-    was_group, was_region = group[joined[was]], regions[was]  # pixels joined at the last frame
+    was_id, was_region = joined[was], regions[was]  # pixels joined at the last frame
     for lab, th, t in zip(ids, thetas, trans):
         if lab > len(boxes) or boxes[lab - 1] is None:
             continue
@@ -149,7 +145,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                     slice(max(cols.start - REACH, 0), min(cols.stop + REACH, w)))
         mask = (labels[near_box] == lab).astype(np.uint8)
         near = np.unique(regions[near_box][(cv2.dilate(mask, reach) > 0) & (mask == 0)])
-        kept = np.bincount(was_region[was_group == group[lab]], minlength=n) / area >= KEPT_SHARE
+        kept = np.bincount(was_region[was_id == lab], minlength=n) / area >= KEPT_SHARE
         for c in near[np.where(kept[near], eligible[near], new[near])]:
             if static is None:
                 static = cv2.blur(still, (3, 3))
@@ -167,17 +163,6 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     return out
 
 
-def group_lut(group_of: dict[int, int], top: int) -> np.ndarray:
-    """(m,) int32 lookup table: id -> its group's representative id (``group_of``; ids
-    not in it, or mapped to 0, keep their own), for ids up to ``top`` and those of
-    ``group_of``."""
-    lut = np.arange(max([top, *group_of.keys(), 0]) + 1, dtype=np.int32)
-    for i, r in group_of.items():
-        if r:
-            lut[i] = r
-    return lut
-
-
 def carried_joins(with_links: np.ndarray, labels: np.ndarray, group_of: dict[int, int]
                   ) -> np.ndarray:
     """The pixels :func:`join_flat_regions` added, each under the group of the MotionBit
@@ -192,5 +177,9 @@ def carried_joins(with_links: np.ndarray, labels: np.ndarray, group_of: dict[int
     Returns:
         (H, W) int32: the group's id on the joined pixels, 0 elsewhere.
     """
-    lut = group_lut(group_of, int(with_links.max(initial=0)))
+    lut = np.arange(int(max([with_links.max(initial=0), *group_of.keys(), 0])) + 1,
+                    dtype=np.int32)
+    for i, r in group_of.items():
+        if r:
+            lut[i] = r
     return np.where(with_links != labels, lut[with_links], 0).astype(np.int32)

@@ -475,7 +475,7 @@ class MotionBitsSegmenter:
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
             with_links = join_flat_regions(
-                labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined, group_of,
+                labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
                 move_threshold=cfg.move_threshold, min_area=speck_area)
             self._joined = carried_joins(with_links, labels, group_of)
             shown = snap_to_edges(group_map(with_links, rep), cur,
