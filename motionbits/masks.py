@@ -261,7 +261,8 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     return drop_labels(label_map, small[area[small] > 0])
 
 
-def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
+def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
+                         half_gradient: np.ndarray | None = None) -> np.ndarray:
     """Give back to the background the mask pixels that lie in a flat region of the image
     of which their mask covers less than ``HALO_MASK_SHARE``; give a mask the rest of a
     flat region of which it covers at least ``FACE_MASK_SHARE``.
@@ -278,6 +279,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     Args:
         label_map: (H, W) int32 labels (0 = background).
         rgb: (H, W, 3) uint8 frame at the same size.
+        half_gradient: ``motionbits.aperture.half_colour_gradient(rgb)`` if already computed.
 
     Returns:
         (H, W) int32 label map: each mask of ``label_map`` less its halos, plus the
@@ -285,7 +287,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     """
     if not label_map.any():
         return label_map
-    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT)
+    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT, half_gradient)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     # the labelled pixels of flat regions (region 0: the pixels that are not flat), each
     # (region, label) pair as one integer: the share of its region each mask covers

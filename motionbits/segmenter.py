@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from motionbits.aperture import join_flat_regions
+from motionbits.aperture import half_colour_gradient, join_flat_regions
 from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
 from motionbits.camera import compensate_camera
@@ -473,9 +473,11 @@ class MotionBitsSegmenter:
             # the masks shown (one per group) take the flat links that move along
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
+            half_gradient = half_colour_gradient(cur)  # flat regions (links, halos)
             with_links = join_flat_regions(
                 labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
-                move_threshold=cfg.move_threshold, min_area=speck_area)
+                move_threshold=cfg.move_threshold, min_area=speck_area,
+                half_gradient=half_gradient)
             self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
@@ -484,7 +486,7 @@ class MotionBitsSegmenter:
             # are trimmed, it still covers MIN_SHOWN_CELLS grid cells (smaller ones are
             # flow noise, or a sliver of smeared flow); its outline goes where its colours
             # end (flow is smooth across a moving body's outline)
-            shown = trim_flat_background(hide_edgeless(shown, gradient), cur)
+            shown = trim_flat_background(hide_edgeless(shown, gradient), cur, half_gradient)
             shown = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
