@@ -14,7 +14,7 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.aperture import flat_regions
-from motionbits.boxes import grow_box, label_boxes
+from motionbits.boxes import grow_box, label_areas, label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
@@ -170,13 +170,19 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     out = np.zeros((h, w), np.int32)
     shown = np.zeros((h, w), bool)
     node_map = grid.to_image(node_labels.astype(np.int32))
+    if len(kept):  # on each one's box of ``prior``
+        kept_cost = static_cost - credit
+        kept_boxes = label_boxes(prior, max_label=int(max(kept)))
     for lab in kept:
-        on = (prior == lab) & prior_valid
-        cost = static_cost - credit
-        better = on & (cost < best)
-        best[better] = cost[better]
-        out[better] = lab
-        shown[better] = True
+        box = kept_boxes[lab - 1]
+        if box is None:
+            continue
+        on = (prior[box] == lab) & prior_valid[box]
+        cost = kept_cost[box]
+        better = on & (cost < best[box])
+        best[box][better] = cost[better]
+        out[box][better] = lab
+        shown[box][better] = True
     for lab, th, t in zip(labels, thetas, trans):
         support = _support_box(grid, node_labels, lab)
         if support is None:
@@ -256,7 +262,7 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     Returns:
         (H, W) int32 label map (``label_map`` itself if nothing is hidden).
     """
-    area = np.bincount(label_map.ravel())
+    area = label_areas(label_map)
     small = np.flatnonzero(area[1:] < min_area) + 1
     return drop_labels(label_map, small[area[small] > 0])
 

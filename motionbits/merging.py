@@ -42,7 +42,7 @@ from functools import cache
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import label_boxes, nonzero_box
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
@@ -126,11 +126,15 @@ def drop_seen_still(labels: np.ndarray, prior: np.ndarray, still_seen: np.ndarra
     top = int(labels.max()) + 1
     if not first_moved or top == 1:
         return labels
-    first = np.full(top, np.iinfo(np.int32).max, np.int64)  # never moved: never dropped
+    first = np.full(top, np.iinfo(np.int32).max, np.int32)  # never moved: never dropped
     ids = np.fromiter(first_moved.keys(), np.int64, len(first_moved))
     frames = np.fromiter(first_moved.values(), np.int64, len(first_moved))
     first[ids[ids < top]] = frames[ids < top]
-    places = ((labels != prior) & (still_seen > first[labels])).view(np.uint8)
+    # only where a label is (``first[0]``: never); int32 as ``still_seen``
+    places = np.zeros(labels.shape, np.uint8)
+    box = nonzero_box(labels)
+    lab = labels[box]
+    places[box] = (lab != prior[box]) & (still_seen[box] > first[lab])
     square = np.ones((DROP_WIDTH, DROP_WIDTH), np.uint8)
     labels[cv2.morphologyEx(places, cv2.MORPH_OPEN, square) > 0] = 0
     return labels

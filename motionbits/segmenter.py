@@ -17,6 +17,7 @@ from threadpoolctl import ThreadpoolController
 from motionbits.aperture import half_colour_gradient, join_flat_regions
 from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
+from motionbits.boxes import label_areas
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
 from motionbits.config import MotionBitsConfig
@@ -437,14 +438,16 @@ class MotionBitsSegmenter:
                              first_new, still_before, prior_nodes, back_pts, reliability,
                              cur_g, prev_g, disagree=cfg.merge_disagree,
                              first_moved=self._spans.first)
-            before = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            observed = labels
+            before = np.flatnonzero(label_areas(labels)[1:]) + 1
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
             labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
                                     self.frame_index)
-            present = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            present = (before if labels is observed  # none retired
+                       else np.flatnonzero(label_areas(labels)[1:]) + 1)
             self._memory.forget(np.setdiff1d(before, present))  # retired
             rep = self._groups.representatives(present)
             # a MotionBit born this frame is shown once it moves again, or as part of a
