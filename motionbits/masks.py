@@ -375,10 +375,9 @@ def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarr
     box = (slice(max(ys[0] - band - 1, 0), min(ys[-1] + band + 2, h)),
            slice(max(xs[0] - band - 1, 0), min(xs[-1] + band + 2, w)))
     sub = label_map[box]
-    markers = np.zeros(sub.shape, np.int32)
     near = cv2.dilate((sub > 0).astype(np.uint8), cv2.getStructuringElement(
         cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1)))
-    markers[near == 0] = 1
+    markers = (near == 0).astype(np.int32)  # 1: the background's marker
     ridge_kernel = np.ones((3, 3), np.uint8)
     for i, lbox in enumerate(ndimage.find_objects(sub)):
         if lbox is None:

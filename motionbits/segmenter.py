@@ -17,7 +17,7 @@ from threadpoolctl import ThreadpoolController
 from motionbits.aperture import half_colour_gradient, join_flat_regions
 from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
-from motionbits.boxes import label_areas
+from motionbits.boxes import label_areas, nonzero_box
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
 from motionbits.config import MotionBitsConfig
@@ -386,7 +386,9 @@ class MotionBitsSegmenter:
             thetas, trans = fit_cluster_motions(pts, back_pts, reliability, node_ids, ids,
                                                 cfg.ransac_threshold)
             # ids carried validly (np.unique's result, without its sort)
-            kept = np.setdiff1d(np.flatnonzero(np.bincount(prior[prior_valid & (prior > 0)])), ids)
+            carried = nonzero_box(prior)
+            kept = np.setdiff1d(np.flatnonzero(np.bincount(
+                prior[carried][prior_valid[carried] & (prior[carried] > 0)])), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
             carried_earned = earned
             speed = cv2.magnitude(flow_m[..., 0], flow_m[..., 1])  # (h, w) px the pixel moves
@@ -481,7 +483,9 @@ class MotionBitsSegmenter:
                 labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
                 move_threshold=cfg.move_threshold, min_area=speck_area,
                 half_gradient=half_gradient)
-            self._joined = np.where(with_links != labels, with_links, 0).astype(np.int32)
+            self._joined = (np.zeros(labels.shape, np.int32) if with_links is labels  # none
+                            else np.where(with_links != labels, with_links, 0).astype(
+                                np.int32, copy=False))
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
             # a mask is shown if its outline is an image edge (a mask left on a flat table
