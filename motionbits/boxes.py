@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
 __all__ = ["grow_box", "label_areas", "label_boxes", "nonzero_box"]
 
@@ -33,14 +32,37 @@ def label_areas(label_map: np.ndarray) -> np.ndarray:
 
 
 def label_boxes(label_map: np.ndarray, max_label: int = 0) -> list[tuple[slice, slice] | None]:
-    """``scipy.ndimage.find_objects(label_map, max_label)`` of an (H, W) integer label map
-    (the same list: the (rows, cols) box of label i + 1 at index i, None where absent),
-    read on the box of its non-zero pixels only (find_objects visits every pixel, and
-    MotionBits often cover a small part of the frame)."""
+    """``scipy.ndimage.find_objects(label_map, max_label)`` of an (H, W) non-negative
+    integer label map (the same list: the (rows, cols) box of label i + 1 at index i, None
+    where absent), read on the box of its non-zero pixels only and from the runs of one
+    label along each row (find_objects visits every pixel; MotionBits often cover a small
+    part of the frame, and a row crosses few outlines)."""
     rows, cols = nonzero_box(label_map)
     if rows.start == rows.stop:  # no label at all
         return [None] * max_label
+    sub = label_map[rows, cols]
+    w = sub.shape[1]
+    first = np.empty(sub.shape, bool)  # the first pixel of each run (each row starts one)
+    first[:, 0] = True
+    np.not_equal(sub[:, 1:], sub[:, :-1], out=first[:, 1:])
+    start = np.flatnonzero(first)
+    row, col0 = np.divmod(start, w)
+    col1 = (np.append(start[1:], sub.size) - 1) % w  # a run ends where the next starts
+    lab = sub[row, col0]
+    n = max_label or int(lab.max())
+    out: list[tuple[slice, slice] | None] = [None] * n
+    run = (lab > 0) & (lab <= n)
+    if not run.any():
+        return out
+    # runs grouped by label, each group in row-major order: its first and last runs hold
+    # the label's top and bottom rows
+    order = np.flatnonzero(run)[np.argsort(lab[run], kind="stable")]
+    lab, row, col0, col1 = lab[order], row[order], col0[order], col1[order]
+    ids, at = np.unique(lab, return_index=True)
+    end = np.append(at[1:], len(lab)) - 1
     y, x = rows.start, cols.start
-    return [None if b is None else
-            (slice(b[0].start + y, b[0].stop + y), slice(b[1].start + x, b[1].stop + x))
-            for b in ndimage.find_objects(label_map[rows, cols], max_label)]
+    for i, top, bottom, left, right in zip(
+            ids.tolist(), row[at].tolist(), row[end].tolist(),
+            np.minimum.reduceat(col0, at).tolist(), np.maximum.reduceat(col1, at).tolist()):
+        out[i - 1] = (slice(top + y, bottom + y + 1), slice(left + x, right + x + 1))
+    return out

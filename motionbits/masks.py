@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
 from motionbits.aperture import flat_regions
 from motionbits.boxes import grow_box, label_areas, label_boxes
@@ -379,7 +378,7 @@ def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarr
         cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1)))
     markers = (near == 0).astype(np.int32)  # 1: the background's marker
     ridge_kernel = np.ones((3, 3), np.uint8)
-    for i, lbox in enumerate(ndimage.find_objects(sub)):
+    for i, lbox in enumerate(label_boxes(sub)):
         if lbox is None:
             continue
         rows = slice(max(lbox[0].start - 1, 0), lbox[0].stop + 1)

@@ -42,6 +42,10 @@ def test_label_boxes_are_find_objects():
     rng = np.random.default_rng(2)
     maps = [_blobs(rng, n=n) for n in (1, 4, 9) for _ in range(5)]
     maps += [np.zeros((20, 30), np.int32), np.pad(np.ones((1, 1), np.int32), ((19, 0), (29, 0)))]
+    # scattered pixels: many runs per row, labels beyond max_label, other dtypes, views
+    maps += [(rng.integers(0, 7, (h, w)) * (rng.random((h, w)) < 0.4)).astype(dtype)
+             for h, w in ((1, 1), (1, 9), (9, 1), (23, 31)) for dtype in (np.int32, np.uint16)]
+    maps += [m[3:15, 5:] for m in maps[:5]]
     for labels in maps:
         for max_label in (0, 2, 12):
             assert label_boxes(labels, max_label) == ndimage.find_objects(labels, max_label)
