@@ -308,8 +308,12 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     if face.any():
         owner = np.zeros(len(area), np.int32)  # region -> the mask it belongs to (0: none)
         owner[region[face]] = label[face]
-        background = out == 0
-        out[background] = owner[regions[background]]
+        # on the box of the faces (``flat_regions``' stats box each region's pixels)
+        x, y, w, h = (stats[np.flatnonzero(owner), i] for i in range(4))
+        box = (slice(y.min(), (y + h).max()), slice(x.min(), (x + w).max()))
+        sub = out[box]
+        background = sub == 0
+        sub[background] = owner[regions[box][background]]
     return out
 
 

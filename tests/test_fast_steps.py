@@ -92,6 +92,21 @@ def test_flat_regions_from_a_shared_gradient():
             np.testing.assert_array_equal(got, want)
 
 
+def test_flat_regions_stats_box_each_region():
+    # trim_flat_background reads the faces on the box of their stats
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        h, w = (int(v) for v in rng.integers(5, 90, 2))
+        blocks = rng.integers(0, 256, (rng.integers(2, 9), rng.integers(2, 9), 3), dtype=np.uint8)
+        rgb = cv2.resize(blocks, (w, h), interpolation=cv2.INTER_NEAREST)
+        _, regions, stats = flat_regions(rgb, 3.0)
+        for i, box in enumerate(ndimage.find_objects(regions)):
+            if box is not None:
+                x, y, bw, bh = stats[i + 1, :4]
+                assert y <= box[0].start and box[0].stop <= y + bh
+                assert x <= box[1].start and box[1].stop <= x + bw
+
+
 def test_nearest_maps_remap_as_the_float_maps():
     rng = np.random.default_rng(3)
     values = rng.integers(0, 1000, (30, 40)).astype(np.int32)
