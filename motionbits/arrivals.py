@@ -129,7 +129,7 @@ class Arrivals:
             reach = int(round(NEAR_CELLS * max(cell)))
             still = np.zeros(labels.shape, bool)  # on the labels' box (standing[0] is False)
             labelled = nonzero_box(labels)
-            still[labelled] = standing[labels[labelled]]
+            still[labelled] = np.take(standing, labels[labelled])
             rows, cols = np.flatnonzero(still.any(axis=1)), np.flatnonzero(still.any(axis=0))
             box = grow_box((slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)),
                            reach, labels.shape)

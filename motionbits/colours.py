@@ -81,7 +81,7 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
         # each colour's share, then each pixel's (a lookup: bins are fewer than pixels)
         p_in = np.bincount(inside, minlength=n_bins) / np.float32(len(inside))
         p_out = np.bincount(outside, minlength=n_bins) / np.float32(len(outside))
-        share = ((p_in + 1e-4) / (p_in + p_out + 2e-4)).astype(np.float32)[code]
+        share = np.take(((p_in + 1e-4) / (p_in + p_out + 2e-4)).astype(np.float32), code)
         mine = cv2.blur(share, (COLOUR_SMOOTH, COLOUR_SMOOTH)) > 0.5
         band_px = outer & ~inner
         lost = band_px & (mask > 0) & ~mine

@@ -313,7 +313,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
         box = (slice(y.min(), (y + h).max()), slice(x.min(), (x + w).max()))
         sub = out[box]
         background = sub == 0
-        sub[background] = owner[regions[box][background]]
+        sub[background] = np.take(owner, regions[box][background])
     return out
 
 

@@ -134,7 +134,7 @@ def drop_seen_still(labels: np.ndarray, prior: np.ndarray, still_seen: np.ndarra
     places = np.zeros(labels.shape, np.uint8)
     box = nonzero_box(labels)
     lab = labels[box]
-    places[box] = (lab != prior[box]) & (still_seen[box] > first[lab])
+    places[box] = (lab != prior[box]) & (still_seen[box] > np.take(first, lab))
     square = np.ones((DROP_WIDTH, DROP_WIDTH), np.uint8)
     labels[cv2.morphologyEx(places, cv2.MORPH_OPEN, square) > 0] = 0
     return labels

@@ -124,10 +124,10 @@ def group_map(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
     for i, r in rep.items():
         lut[i] = r
     if labels.ndim != 2 or lut[0]:
-        return lut[labels]
+        return np.take(lut, labels)
     out = np.zeros(labels.shape, np.int32)  # background stays background: the labels' box
     box = nonzero_box(labels)
-    out[box] = lut[labels[box]]
+    out[box] = np.take(lut, labels[box])  # np.take: faster than lut[...] (int32)
     return out
 
 
