@@ -25,7 +25,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import label_boxes, run_counts
 from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
@@ -128,8 +128,8 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     n = len(stats)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     moving = speed > move_threshold
-    moving_share = np.bincount(regions[moving], minlength=n) / area
-    free = np.bincount(regions[labels == 0], minlength=n) / area >= 0.5
+    moving_share = run_counts(regions[moving], n) / area
+    free = run_counts(regions[labels == 0], n) / area >= 0.5
     h, w = labels.shape
     x, y, bw, bh = (stats[:, i] for i in range(4))  # each region's box
     border = (x == 0) | (y == 0) | (x + bw >= w) | (y + bh >= h)

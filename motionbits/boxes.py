@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["grow_box", "label_areas", "label_boxes", "nonzero_box"]
+__all__ = ["grow_box", "label_areas", "label_boxes", "nonzero_box", "run_counts"]
 
 
 def grow_box(box: tuple[slice, slice], reach: int, shape: tuple[int, ...]
@@ -22,11 +22,24 @@ def nonzero_box(label_map: np.ndarray) -> tuple[slice, slice]:
     return slice(y, y + h), slice(x, x + w)
 
 
+def run_counts(values: np.ndarray, minlength: int = 0) -> np.ndarray:
+    """``np.bincount(values, minlength=minlength)`` of (n,) non-negative integers, counted
+    by runs of one value: bincount's one-by-one count stalls on the long runs of a label
+    map's pixels (several times slower)."""
+    first = np.empty(values.size, bool)  # the first element of each run
+    first[:1] = True
+    np.not_equal(values[1:], values[:-1], out=first[1:])
+    start = np.flatnonzero(first)
+    # run lengths summed per value: exact integers in float64
+    return np.bincount(values[start], weights=np.diff(start, append=values.size),
+                       minlength=minlength).astype(np.intp)
+
+
 def label_areas(label_map: np.ndarray) -> np.ndarray:
     """``np.bincount(label_map.ravel())`` of an (H, W) non-negative integer label map: px
     of each label, counted on the box of the non-zero pixels only (the zeros by
-    difference)."""
-    area = np.bincount(label_map[nonzero_box(label_map)].ravel(), minlength=1)
+    difference), by runs (:func:`run_counts`)."""
+    area = run_counts(label_map[nonzero_box(label_map)].ravel(), minlength=1)
     area[0] = label_map.size - area[1:].sum()
     return area
 

@@ -17,7 +17,7 @@ from threadpoolctl import ThreadpoolController
 from motionbits.aperture import half_colour_gradient, join_flat_regions
 from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
-from motionbits.boxes import label_areas, nonzero_box
+from motionbits.boxes import label_areas, nonzero_box, run_counts
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
 from motionbits.config import MotionBitsConfig
@@ -387,7 +387,7 @@ class MotionBitsSegmenter:
                                                 cfg.ransac_threshold)
             # ids carried validly (np.unique's result, without its sort)
             carried = nonzero_box(prior)
-            kept = np.setdiff1d(np.flatnonzero(np.bincount(
+            kept = np.setdiff1d(np.flatnonzero(run_counts(
                 prior[carried][prior_valid[carried] & (prior[carried] > 0)])), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
             carried_earned = earned

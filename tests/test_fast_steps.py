@@ -6,7 +6,7 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.aperture import flat_regions, half_colour_gradient
-from motionbits.boxes import label_areas, label_boxes, nonzero_box
+from motionbits.boxes import label_areas, label_boxes, nonzero_box, run_counts
 from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
@@ -61,6 +61,12 @@ def test_label_areas_are_bincount():
         assert area.dtype == np.bincount(labels.ravel()).dtype
         rows, cols = nonzero_box(labels)
         assert np.count_nonzero(labels[rows, cols]) == np.count_nonzero(labels)
+        values = labels[labels % 3 != 1]  # runs broken up
+        for minlength in (0, 1, 20):
+            want = np.bincount(values, minlength=minlength)
+            got = run_counts(values, minlength)
+            assert got.dtype == want.dtype
+            np.testing.assert_array_equal(got, want)
 
 
 def _light_change_along_last_axis(now, then):
