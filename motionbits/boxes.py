@@ -5,7 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["grow_box", "label_areas", "label_boxes", "nonzero_box", "run_counts"]
+__all__ = ["grow_box", "label_areas", "label_boxes", "nonzero_box", "run_counts",
+           "run_starts"]
 
 
 def grow_box(box: tuple[slice, slice], reach: int, shape: tuple[int, ...]
@@ -22,14 +23,20 @@ def nonzero_box(label_map: np.ndarray) -> tuple[slice, slice]:
     return slice(y, y + h), slice(x, x + w)
 
 
+def run_starts(values: np.ndarray) -> np.ndarray:
+    """(k,) int64 index of the first element of each run of one value in (n,) ``values``
+    (a label map's pixels, row by row, come in long runs)."""
+    first = np.empty(values.size, bool)
+    first[:1] = True
+    np.not_equal(values[1:], values[:-1], out=first[1:])
+    return np.flatnonzero(first)
+
+
 def run_counts(values: np.ndarray, minlength: int = 0) -> np.ndarray:
     """``np.bincount(values, minlength=minlength)`` of (n,) non-negative integers, counted
     by runs of one value: bincount's one-by-one count stalls on the long runs of a label
     map's pixels (several times slower)."""
-    first = np.empty(values.size, bool)  # the first element of each run
-    first[:1] = True
-    np.not_equal(values[1:], values[:-1], out=first[1:])
-    start = np.flatnonzero(first)
+    start = run_starts(values)
     # run lengths summed per value: exact integers in float64
     return np.bincount(values[start], weights=np.diff(start, append=values.size),
                        minlength=minlength).astype(np.intp)
