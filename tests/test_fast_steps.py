@@ -182,6 +182,8 @@ def test_touching_pairs_on_the_labelled_box():
     assert touching_pairs(labels, reach=3) == {(1, 2)}  # columns 19 and 22
     assert touching_pairs(labels, reach=2) == set()
     assert touching_pairs(np.zeros((5, 5), np.int32), reach=1) == set()
+    # ids beyond uint16 (float32 morphology)
+    assert touching_pairs(np.where(labels > 0, labels + 70_000, 0), reach=3) == {(70_001, 70_002)}
 
 
 def test_twist_sources_are_the_largest_members_with_motion():
