@@ -85,7 +85,7 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
         mine = cv2.blur(share, (COLOUR_SMOOTH, COLOUR_SMOOTH)) > 0.5
         band_px = outer & ~inner
         lost = band_px & (mask > 0) & ~mine
-        if lost.sum() > (1 - MIN_KEPT) * mask.sum():
+        if np.count_nonzero(lost) > (1 - MIN_KEPT) * np.count_nonzero(mask):
             continue  # the colours do not tell this body from its surroundings
         sub = out[rows, cols]
         sub[lost] = 0

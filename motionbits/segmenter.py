@@ -296,7 +296,8 @@ class MotionBitsSegmenter:
             prior_valid = reliable & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
-            if prior_valid.mean() < cfg.cut_share:  # another scene: a cut, a new shot
+            # another scene: a cut, a new shot
+            if np.count_nonzero(prior_valid) / prior_valid.size < cfg.cut_share:
                 self._new_shot()
                 self._prev, self._prev_gray = cur, cur_g
                 return self._empty_result()
