@@ -28,12 +28,12 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import label_boxes, run_counts
 from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
-__all__ = ["flat_regions", "join_flat_regions", "carried_joins", "FLAT_GRADIENT", "MOVING_SHARE",
-           "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE"]
+__all__ = ["flat_regions", "half_colour_gradient", "join_flat_regions", "carried_joins",
+           "FLAT_GRADIENT", "MOVING_SHARE", "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE"]
 
 #: grey levels per px: a pixel whose colour gradient (largest over R, G, B) is below this
 #: is flat.
@@ -57,7 +57,22 @@ REACH = 4
 KEPT_SHARE = 0.5
 
 
-def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT
+def half_colour_gradient(rgb: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8 frame -> ((H + 1) // 2, (W + 1) // 2) float32 colour gradient at half
+    resolution: the 3x3 Sobel magnitude of the lightly smoothed half-size frame, the
+    largest over R, G, B (what :func:`flat_regions` thresholds)."""
+    h, w = rgb.shape[:2]
+    half = cv2.resize(rgb, ((w + 1) // 2, (h + 1) // 2), interpolation=cv2.INTER_AREA)
+    smooth = cv2.GaussianBlur(half, (0, 0), 0.5).astype(np.float32)
+    gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)
+    grad = cv2.magnitude(gx, gy)
+    # the largest over R, G, B (cv2.max: numpy's max along the last axis is 20x slower)
+    return cv2.max(cv2.max(grad[..., 0], grad[..., 1]), grad[..., 2])
+
+
+def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT,
+                 half_gradient: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Connected regions of flat colour, found at half resolution (4x cheaper; a link is
     wider than a few px).
@@ -65,6 +80,7 @@ def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT
     Args:
         rgb: (H, W, 3) uint8 frame.
         max_gradient: grey levels per px (largest over R, G, B) under which a pixel is flat.
+        half_gradient: ``half_colour_gradient(rgb)`` if already computed.
 
     Returns:
         (flat, regions, stats): (H, W) bool flat pixels, (H, W) int32 region of each pixel
@@ -73,13 +89,7 @@ def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT
         are not flat).
     """
     h, w = rgb.shape[:2]
-    half = cv2.resize(rgb, ((w + 1) // 2, (h + 1) // 2), interpolation=cv2.INTER_AREA)
-    smooth = cv2.GaussianBlur(half, (0, 0), 0.5).astype(np.float32)
-    gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3)
-    grad = cv2.magnitude(gx, gy)
-    # the largest over R, G, B (cv2.max: numpy's max along the last axis is 20x slower)
-    grad = cv2.max(cv2.max(grad[..., 0], grad[..., 1]), grad[..., 2])
+    grad = half_colour_gradient(rgb) if half_gradient is None else half_gradient
     # a 3x3 Sobel reads 8x the grey levels per px of a ramp; one px here is two of the frame
     flat = grad < 8 * 2 * max_gradient
     _, regions, stats = cv2.connectedComponentsWithStats(flat.astype(np.uint8),
@@ -94,8 +104,8 @@ def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT
 def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                       trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
                       prev_gray: np.ndarray, still: np.ndarray, speed: np.ndarray,
-                      joined: np.ndarray, *, move_threshold: float, min_area: int
-                      ) -> np.ndarray:
+                      joined: np.ndarray, *, move_threshold: float, min_area: int,
+                      half_gradient: np.ndarray | None = None) -> np.ndarray:
     """The label map with flat links that move along themselves joined to their MotionBit.
 
     Args:
@@ -109,6 +119,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
         joined: (H, W) int32 pixels joined at the last frame (their id), carried to this one.
         move_threshold: px; a pixel's flow moves above this.
         min_area: px; smaller regions never join.
+        half_gradient: ``half_colour_gradient(rgb)`` if already computed.
 
     Returns:
         (H, W) int32 label map: ``labels`` plus the joined regions (only background
@@ -116,12 +127,12 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     """
     if not len(ids):
         return labels
-    flat, regions, stats = flat_regions(rgb)
+    flat, regions, stats = flat_regions(rgb, half_gradient=half_gradient)
     n = len(stats)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     moving = speed > move_threshold
-    moving_share = np.bincount(regions[moving], minlength=n) / area
-    free = np.bincount(regions[labels == 0], minlength=n) / area >= 0.5
+    moving_share = run_counts(regions[moving], n) / area
+    free = run_counts(regions[labels == 0], n) / area >= 0.5
     h, w = labels.shape
     x, y, bw, bh = (stats[:, i] for i in range(4))  # each region's box
     border = (x == 0) | (y == 0) | (x + bw >= w) | (y + bh >= h)

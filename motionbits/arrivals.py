@@ -45,7 +45,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.boxes import grow_box
+from motionbits.boxes import grow_box, label_areas, nonzero_box
 from motionbits.revealed import (WINDOW, _color_difference, follow_ids, follow_known,
                                  follow_look, light_change)
 from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
@@ -126,13 +126,15 @@ class Arrivals:
             One :data:`Arrival` per piece, in no particular order.
         """
         self._waiting[:] = False
-        standing = np.bincount(labels.ravel()) > 0  # id -> it stands still now
+        standing = label_areas(labels) > 0  # id -> it stands still now
         standing[0] = False
         standing[[i for i in moving if i < standing.size]] = False
         candidate = self.visited > 0
         if standing.any():  # and around the MotionBits standing still (on their box)
             reach = int(round(NEAR_CELLS * max(cell)))
-            still = standing[labels]
+            still = np.zeros(labels.shape, bool)  # on the labels' box (standing[0] is False)
+            labelled = nonzero_box(labels)
+            still[labelled] = np.take(standing, labels[labelled])
             rows, cols = np.flatnonzero(still.any(axis=1)), np.flatnonzero(still.any(axis=0))
             box = grow_box((slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)),
                            reach, labels.shape)
@@ -230,7 +232,7 @@ class Arrivals:
         self.known |= free
         self.visited *= ~free
         cv2.copyTo(labels, (labels > 0).view(np.uint8), self.visited)
-        areas = np.bincount(labels.ravel())
+        areas = label_areas(labels)
         self._largest = {int(i): max(self._largest.get(int(i), 0), int(areas[i]))
                          for i in np.flatnonzero(areas[1:]) + 1}
 

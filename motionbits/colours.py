@@ -59,7 +59,6 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
     """
     if band < 1 or not label_map.any():
         return label_map
-    codes = colour_codes(rgb)
     reach = 2 * band + 2
     out = label_map.copy()
     n_bins = COLOUR_BINS ** 3
@@ -67,7 +66,7 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
         if box is None:
             continue
         rows, cols = grow_box(box, reach, label_map.shape)
-        labels, code = label_map[rows, cols], codes[rows, cols]
+        labels, code = label_map[rows, cols], colour_codes(rgb[rows, cols])
         mask = (labels == i + 1).astype(np.uint8)
         # distances (px) to the mask from outside and to the background from inside: the
         # erosion / dilations by a disk, in time linear in the box's pixels
@@ -79,13 +78,14 @@ def snap_to_colours(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.nda
         inside, outside = code[inner], code[around]
         if len(outside) < MIN_COLOUR_SAMPLES or len(inside) < MIN_COLOUR_SAMPLES:
             continue
-        p_in = np.bincount(inside, minlength=n_bins)[code] / np.float32(len(inside))
-        p_out = np.bincount(outside, minlength=n_bins)[code] / np.float32(len(outside))
-        share = (p_in + 1e-4) / (p_in + p_out + 2e-4)
-        mine = cv2.blur(share.astype(np.float32), (COLOUR_SMOOTH, COLOUR_SMOOTH)) > 0.5
+        # each colour's share, then each pixel's (a lookup: bins are fewer than pixels)
+        p_in = np.bincount(inside, minlength=n_bins) / np.float32(len(inside))
+        p_out = np.bincount(outside, minlength=n_bins) / np.float32(len(outside))
+        share = np.take(((p_in + 1e-4) / (p_in + p_out + 2e-4)).astype(np.float32), code)
+        mine = cv2.blur(share, (COLOUR_SMOOTH, COLOUR_SMOOTH)) > 0.5
         band_px = outer & ~inner
         lost = band_px & (mask > 0) & ~mine
-        if lost.sum() > (1 - MIN_KEPT) * mask.sum():
+        if np.count_nonzero(lost) > (1 - MIN_KEPT) * np.count_nonzero(mask):
             continue  # the colours do not tell this body from its surroundings
         sub = out[rows, cols]
         sub[lost] = 0

@@ -16,6 +16,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 
+from motionbits.boxes import run_starts
+
 __all__ = ["refine_history", "match_ids", "identify_clusters", "NOVEL_SHARE"]
 
 #: Side (nodes) of the square in which a node counts as interior to its cluster (all of
@@ -69,15 +71,19 @@ def refine_history(history: np.ndarray, labels: np.ndarray, margin: int = 0) -> 
             interior_flat = np.flatnonzero(interior.ravel())
             edge = np.flatnonzero(outside.ravel())  # interior pixels are their own nearest
             sub = key[box].ravel()  # a copy: the box is not contiguous in ``key``
-            sub[edge] = sub[interior_flat[nearest.ravel()[edge] - 1]]
+            sub[edge] = sub[np.take(interior_flat, nearest.ravel()[edge] - 1)]
             key[box] = sub.reshape(interior.shape)
     # compact renumbering by rank; class 0 stays "background in every map"
     largest = int(key.max())
     if largest < 4 * key.size:  # a table lookup, without np.unique's sort
+        # run by run (the pixels come in long runs of one key): the keys present, and
+        # each run's rank repeated over it
+        flat = key.ravel()
+        start = run_starts(flat)
         present = np.zeros(largest + 1, np.int64)
-        present[key.ravel()] = 1
+        present[flat[start]] = 1
         rank = (np.cumsum(present) - (1 if present[0] else 0)).astype(np.int32)
-        return rank[key]
+        return np.repeat(rank[flat[start]], np.diff(start, append=flat.size)).reshape(key.shape)
     uniq, inv = np.unique(key.ravel(), return_inverse=True)
     inv = inv + (0 if uniq[0] == 0 else 1)
     return inv.reshape(labels.shape).astype(np.int32)

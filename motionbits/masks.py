@@ -11,10 +11,9 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
 from motionbits.aperture import flat_regions
-from motionbits.boxes import grow_box, label_boxes
+from motionbits.boxes import grow_box, label_areas, label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
@@ -170,13 +169,19 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
     out = np.zeros((h, w), np.int32)
     shown = np.zeros((h, w), bool)
     node_map = grid.to_image(node_labels.astype(np.int32))
+    if len(kept):  # on each one's box of ``prior``
+        kept_cost = static_cost - credit
+        kept_boxes = label_boxes(prior, max_label=int(max(kept)))
     for lab in kept:
-        on = (prior == lab) & prior_valid
-        cost = static_cost - credit
-        better = on & (cost < best)
-        best[better] = cost[better]
-        out[better] = lab
-        shown[better] = True
+        box = kept_boxes[lab - 1]
+        if box is None:
+            continue
+        on = (prior[box] == lab) & prior_valid[box]
+        cost = kept_cost[box]
+        better = on & (cost < best[box])
+        best[box][better] = cost[better]
+        out[box][better] = lab
+        shown[box][better] = True
     for lab, th, t in zip(labels, thetas, trans):
         support = _support_box(grid, node_labels, lab)
         if support is None:
@@ -256,12 +261,13 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     Returns:
         (H, W) int32 label map (``label_map`` itself if nothing is hidden).
     """
-    area = np.bincount(label_map.ravel())
+    area = label_areas(label_map)
     small = np.flatnonzero(area[1:] < min_area) + 1
     return drop_labels(label_map, small[area[small] > 0])
 
 
-def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
+def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
+                         half_gradient: np.ndarray | None = None) -> np.ndarray:
     """Give back to the background the mask pixels that lie in a flat region of the image
     of which their mask covers less than ``HALO_MASK_SHARE``; give a mask the rest of a
     flat region of which it covers at least ``FACE_MASK_SHARE``.
@@ -278,6 +284,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     Args:
         label_map: (H, W) int32 labels (0 = background).
         rgb: (H, W, 3) uint8 frame at the same size.
+        half_gradient: ``motionbits.aperture.half_colour_gradient(rgb)`` if already computed.
 
     Returns:
         (H, W) int32 label map: each mask of ``label_map`` less its halos, plus the
@@ -285,7 +292,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     """
     if not label_map.any():
         return label_map
-    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT)
+    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT, half_gradient)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     # the labelled pixels of flat regions (region 0: the pixels that are not flat), each
     # (region, label) pair as one integer: the share of its region each mask covers
@@ -301,8 +308,12 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
     if face.any():
         owner = np.zeros(len(area), np.int32)  # region -> the mask it belongs to (0: none)
         owner[region[face]] = label[face]
-        background = out == 0
-        out[background] = owner[regions[background]]
+        # on the box of the faces (``flat_regions``' stats box each region's pixels)
+        x, y, w, h = (stats[np.flatnonzero(owner), i] for i in range(4))
+        box = (slice(y.min(), (y + h).max()), slice(x.min(), (x + w).max()))
+        sub = out[box]
+        background = sub == 0
+        sub[background] = np.take(owner, regions[box][background])
     return out
 
 
@@ -367,12 +378,11 @@ def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarr
     box = (slice(max(ys[0] - band - 1, 0), min(ys[-1] + band + 2, h)),
            slice(max(xs[0] - band - 1, 0), min(xs[-1] + band + 2, w)))
     sub = label_map[box]
-    markers = np.zeros(sub.shape, np.int32)
     near = cv2.dilate((sub > 0).astype(np.uint8), cv2.getStructuringElement(
         cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1)))
-    markers[near == 0] = 1
+    markers = (near == 0).astype(np.int32)  # 1: the background's marker
     ridge_kernel = np.ones((3, 3), np.uint8)
-    for i, lbox in enumerate(ndimage.find_objects(sub)):
+    for i, lbox in enumerate(label_boxes(sub)):
         if lbox is None:
             continue
         rows = slice(max(lbox[0].start - 1, 0), lbox[0].stop + 1)

@@ -42,7 +42,7 @@ from functools import cache
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import label_boxes, nonzero_box
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
@@ -126,11 +126,15 @@ def drop_seen_still(labels: np.ndarray, prior: np.ndarray, still_seen: np.ndarra
     top = int(labels.max()) + 1
     if not first_moved or top == 1:
         return labels
-    first = np.full(top, np.iinfo(np.int32).max, np.int64)  # never moved: never dropped
+    first = np.full(top, np.iinfo(np.int32).max, np.int32)  # never moved: never dropped
     ids = np.fromiter(first_moved.keys(), np.int64, len(first_moved))
     frames = np.fromiter(first_moved.values(), np.int64, len(first_moved))
     first[ids[ids < top]] = frames[ids < top]
-    places = ((labels != prior) & (still_seen > first[labels])).view(np.uint8)
+    # only where a label is (``first[0]``: never); int32 as ``still_seen``
+    places = np.zeros(labels.shape, np.uint8)
+    box = nonzero_box(labels)
+    lab = labels[box]
+    places[box] = (lab != prior[box]) & (still_seen[box] > np.take(first, lab))
     square = np.ones((DROP_WIDTH, DROP_WIDTH), np.uint8)
     labels[cv2.morphologyEx(places, cv2.MORPH_OPEN, square) > 0] = 0
     return labels
@@ -143,18 +147,21 @@ def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
         labels: (H, W) int label map.
         reach: px (>= 1).
     """
-    rows, cols = np.flatnonzero(labels.any(axis=1)), np.flatnonzero(labels.any(axis=0))
-    if not len(rows):
+    box = nonzero_box(labels)
+    if box[0].start == box[0].stop:
         return set()
     # the labelled box: outside it nothing touches
-    lab = labels[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1].astype(np.int32)
+    lab = labels[box].astype(np.int32)
+    # largest and smallest label within reach (``none``: no label); uint16 morphology
+    # (faster) where the ids fit, else float32
+    dtype, none = ((np.uint16, 0xFFFF) if lab.max() < 0xFFFF
+                   else (np.float32, np.iinfo(np.int32).max))
     kernel = np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)
     pairs: set[tuple[int, int]] = set()
-    grown_max = cv2.dilate(lab.astype(np.float32), kernel)
-    grown_min = -cv2.dilate(-np.where(lab > 0, lab, np.iinfo(np.int32).max).astype(np.float32),
-                            kernel)
+    grown_max = cv2.dilate(lab.astype(dtype), kernel)
+    grown_min = cv2.erode(np.where(lab > 0, lab, none).astype(dtype), kernel)
     for a_map, b_map in ((lab, grown_max), (lab, grown_min)):
-        sel = (a_map > 0) & (b_map > 0) & (b_map != a_map) & (b_map < np.iinfo(np.int32).max)
+        sel = (a_map > 0) & (b_map > 0) & (b_map != a_map) & (b_map < none)
         if sel.any():
             a = a_map[sel].astype(np.int64)
             b = b_map[sel].astype(np.int64)

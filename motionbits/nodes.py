@@ -126,4 +126,4 @@ def binary_fill_holes(mask: np.ndarray) -> np.ndarray:
     outside = np.zeros(n, bool)
     outside[np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]])] = True
     outside[0] = False  # label 0: the mask itself
-    return mask | ~outside[lab]
+    return mask | ~np.take(outside, lab)  # np.take: faster than outside[lab] (int32)

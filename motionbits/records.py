@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import label_boxes, nonzero_box
 from motionbits.nodes import NodeGrid
 from motionbits.objects import Instance, encode_rle
 from motionbits.twists import se2_log
@@ -123,7 +123,12 @@ def group_map(labels: np.ndarray, rep: dict[int, int]) -> np.ndarray:
     lut = np.zeros(max([int(labels.max(initial=0)), *rep.keys(), 0]) + 1, np.int32)
     for i, r in rep.items():
         lut[i] = r
-    return lut[labels]
+    if labels.ndim != 2 or lut[0]:
+        return np.take(lut, labels)
+    out = np.zeros(labels.shape, np.int32)  # background stays background: the labels' box
+    box = nonzero_box(labels)
+    out[box] = np.take(lut, labels[box])  # np.take: faster than lut[...] (int32)
+    return out
 
 
 def _area_centroid(mask: np.ndarray, corner: tuple[int, int]) -> tuple[int, tuple[float, float]]:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import label_areas, label_boxes, run_counts
 from motionbits.masks import drop_labels
 from motionbits.revealed import StaticMemory
 from motionbits.twists import rigid_matrix
@@ -222,7 +222,7 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     if shadow is None:
         return labels
     lab = labels[box]
-    area = np.bincount(lab.ravel())
-    dark = np.bincount(lab[shadow], minlength=len(area))
+    area = label_areas(lab)
+    dark = run_counts(lab[shadow], len(area))
     gone = [i for i in tested if dark[i] > share[i] * area[i]]
     return drop_labels(labels, gone)

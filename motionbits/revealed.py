@@ -66,10 +66,15 @@ def light_change(now: np.ndarray, then: np.ndarray
     (...) float32, with ``chroma`` the largest change of chromaticity (each channel over
     the sum of the three, +1) and ``gain`` the ratio of brightness (the sums, +8 each, so
     that dark pixels do not explode)."""
-    now, then = now.astype(np.float32), then.astype(np.float32)
-    sum_now, sum_then = now.sum(axis=-1), then.sum(axis=-1)
-    chroma = np.abs(now / (sum_now[..., None] + 1) - then / (sum_then[..., None] + 1))
-    return chroma.max(axis=-1), (sum_now + 8) / (sum_then + 8), sum_now, sum_then
+    # channel by channel: numpy's sums and maxima along a last axis of 3 are ~10x slower
+    a = [now[..., c].astype(np.float32) for c in range(3)]
+    b = [then[..., c].astype(np.float32) for c in range(3)]
+    sum_now, sum_then = a[0] + a[1] + a[2], b[0] + b[1] + b[2]
+    scale_now, scale_then = sum_now + 1, sum_then + 1
+    chroma = np.abs(a[0] / scale_now - b[0] / scale_then)
+    for c in (1, 2):
+        np.maximum(chroma, np.abs(a[c] / scale_now - b[c] / scale_then), out=chroma)
+    return chroma, (sum_now + 8) / (sum_then + 8), sum_now, sum_then
 
 
 def follow_known(known: np.ndarray, world: np.ndarray) -> np.ndarray:

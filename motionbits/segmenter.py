@@ -14,9 +14,10 @@ import cv2
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from motionbits.aperture import carried_joins, join_flat_regions
+from motionbits.aperture import carried_joins, half_colour_gradient, join_flat_regions
 from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
+from motionbits.boxes import label_areas, nonzero_box, run_counts
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
 from motionbits.config import MotionBitsConfig
@@ -295,7 +296,8 @@ class MotionBitsSegmenter:
             prior_valid = reliable & appearance_consistent(
                 cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
                 gradient_gain=cfg.carry_gradient)
-            if prior_valid.mean() < cfg.cut_share:  # another scene: a cut, a new shot
+            # another scene: a cut, a new shot
+            if np.count_nonzero(prior_valid) / prior_valid.size < cfg.cut_share:
                 self._new_shot()
                 self._prev, self._prev_gray = cur, cur_g
                 return self._empty_result()
@@ -385,7 +387,9 @@ class MotionBitsSegmenter:
             thetas, trans = fit_cluster_motions(pts, back_pts, reliability, node_ids, ids,
                                                 cfg.ransac_threshold)
             # ids carried validly (np.unique's result, without its sort)
-            kept = np.setdiff1d(np.flatnonzero(np.bincount(prior[prior_valid & (prior > 0)])), ids)
+            carried = nonzero_box(prior)
+            kept = np.setdiff1d(np.flatnonzero(run_counts(
+                prior[carried][prior_valid[carried] & (prior[carried] > 0)])), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
             carried_earned = earned
             speed = cv2.magnitude(flow_m[..., 0], flow_m[..., 1])  # (h, w) px the pixel moves
@@ -437,14 +441,16 @@ class MotionBitsSegmenter:
                              first_new, still_before, prior_nodes, back_pts, reliability,
                              cur_g, prev_g, disagree=cfg.merge_disagree,
                              first_moved=self._spans.first)
-            before = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            observed = labels
+            before = np.flatnonzero(label_areas(labels)[1:]) + 1
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
             labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
                                     self.frame_index)
-            present = np.flatnonzero(np.bincount(labels.ravel())[1:]) + 1
+            present = (before if labels is observed  # none retired
+                       else np.flatnonzero(label_areas(labels)[1:]) + 1)
             self._memory.forget(np.setdiff1d(before, present))  # retired
             rep = self._groups.representatives(present)
             group_of = dict(rep)  # each present id's group, shown or not
@@ -474,10 +480,13 @@ class MotionBitsSegmenter:
             # the masks shown (one per group) take the flat links that move along
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
+            half_gradient = half_colour_gradient(cur)  # flat regions (links, halos)
             with_links = join_flat_regions(
                 labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
-                move_threshold=cfg.move_threshold, min_area=speck_area)
-            self._joined = carried_joins(with_links, labels, group_of)
+                move_threshold=cfg.move_threshold, min_area=speck_area,
+                half_gradient=half_gradient)
+            self._joined = (np.zeros(labels.shape, np.int32) if with_links is labels  # none
+                            else carried_joins(with_links, labels, group_of))
             shown = snap_to_edges(group_map(with_links, rep), cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
             # a mask is shown if its outline is an image edge (a mask left on a flat table
@@ -485,7 +494,7 @@ class MotionBitsSegmenter:
             # are trimmed, it still covers MIN_SHOWN_CELLS grid cells (smaller ones are
             # flow noise, or a sliver of smeared flow); its outline goes where its colours
             # end (flow is smooth across a moving body's outline)
-            shown = trim_flat_background(hide_edgeless(shown, gradient), cur)
+            shown = trim_flat_background(hide_edgeless(shown, gradient), cur, half_gradient)
             shown = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from motionbits.boxes import grow_box
+from motionbits.boxes import grow_box, label_areas
 from motionbits.evidence import photometric_residual
 from motionbits.merging import STILL
 from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
@@ -169,7 +169,7 @@ class SetDown:
         y0, x0 = rows[0], cols[0]
         lost_prior = np.where(lost[y0:rows[-1] + 1, x0:cols[-1] + 1],
                               prior[y0:rows[-1] + 1, x0:cols[-1] + 1], 0)
-        lost_area = np.bincount(lost_prior.ravel())
+        lost_area = label_areas(lost_prior)
         for lab, th, t in zip(ids, thetas, trans):
             if lab >= len(lost_area) or lost_area[lab] < min_area:
                 continue

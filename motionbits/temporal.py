@@ -78,8 +78,8 @@ class TemporalState:
         # every call, the same way) and each map is remapped alone: stacking the maps into
         # channels and splitting them again costs more than the remaps
         nearest = nearest_maps(*(sample_maps(flow_back) if flow_maps is None else flow_maps))
-        self.histories = np.stack([warp_nearest(h, flow_back, maps=nearest)
-                                   for h in self.histories])
+        carried = [warp_nearest(h, flow_back, maps=nearest) for h in self.histories]
+        self.histories = carried[0][None] if len(carried) == 1 else np.stack(carried)
         return ([warp_nearest(m, flow_back, maps=nearest) for m in maps],
                 self.histories[self.oldest])
 

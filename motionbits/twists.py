@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-from motionbits.boxes import grow_box, label_boxes
+from motionbits.boxes import grow_box, label_boxes, nonzero_box
 from motionbits.nodes import binary_fill_holes
 
 __all__ = ["LocalMotions", "fit_local_motions", "kabsch_2d", "se2_log", "se2_exp",
@@ -341,8 +341,12 @@ def refine_moving_motions(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: n
     if not todo:
         return thetas, trans
     small = labels.max() < 1 << 16  # uint16 morphology (faster) where the ids fit
-    inner = cv2.erode(labels.astype(np.uint16 if small else np.float32),
-                      np.ones((REFINE_ERODE, REFINE_ERODE), np.uint8)).astype(np.int32)
+    # on the labels' box grown by the erosion's reach: the whole image's erosion, which is
+    # 0 outside that box
+    box = grow_box(nonzero_box(labels), REFINE_ERODE // 2, labels.shape)
+    inner = np.zeros(labels.shape, np.int32)
+    inner[box] = cv2.erode(labels[box].astype(np.uint16 if small else np.float32),
+                           np.ones((REFINE_ERODE, REFINE_ERODE), np.uint8))
     boxes = label_boxes(inner, max_label=max(int(ids[k]) for k in todo))
     for k in todo:
         box = boxes[int(ids[k]) - 1]

@@ -5,7 +5,8 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-from motionbits.boxes import label_boxes
+from motionbits.aperture import flat_regions, half_colour_gradient
+from motionbits.boxes import label_areas, label_boxes, nonzero_box, run_counts
 from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
@@ -13,6 +14,7 @@ from motionbits.masks import _support_box
 from motionbits.merging import touching_pairs
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.records import twist_sources
+from motionbits.revealed import light_change
 
 
 def _blobs(rng, shape=(90, 120), n=4):
@@ -40,9 +42,75 @@ def test_label_boxes_are_find_objects():
     rng = np.random.default_rng(2)
     maps = [_blobs(rng, n=n) for n in (1, 4, 9) for _ in range(5)]
     maps += [np.zeros((20, 30), np.int32), np.pad(np.ones((1, 1), np.int32), ((19, 0), (29, 0)))]
+    # scattered pixels: many runs per row, labels beyond max_label, other dtypes, views
+    maps += [(rng.integers(0, 7, (h, w)) * (rng.random((h, w)) < 0.4)).astype(dtype)
+             for h, w in ((1, 1), (1, 9), (9, 1), (23, 31)) for dtype in (np.int32, np.uint16)]
+    maps += [m[3:15, 5:] for m in maps[:5]]
     for labels in maps:
         for max_label in (0, 2, 12):
             assert label_boxes(labels, max_label) == ndimage.find_objects(labels, max_label)
+
+
+def test_label_areas_are_bincount():
+    rng = np.random.default_rng(4)
+    maps = [_blobs(rng, n=n) for n in (1, 4, 9) for _ in range(5)]
+    maps += [np.zeros((20, 30), np.int32), np.pad(np.ones((1, 1), np.int32), ((19, 0), (29, 0)))]
+    for labels in maps:
+        area = label_areas(labels)
+        np.testing.assert_array_equal(area, np.bincount(labels.ravel()))
+        assert area.dtype == np.bincount(labels.ravel()).dtype
+        rows, cols = nonzero_box(labels)
+        assert np.count_nonzero(labels[rows, cols]) == np.count_nonzero(labels)
+        values = labels[labels % 3 != 1]  # runs broken up
+        for minlength in (0, 1, 20):
+            want = np.bincount(values, minlength=minlength)
+            got = run_counts(values, minlength)
+            assert got.dtype == want.dtype
+            np.testing.assert_array_equal(got, want)
+
+
+def _light_change_along_last_axis(now, then):
+    """:func:`light_change` as numpy's reductions along the colour axis compute it."""
+    now, then = now.astype(np.float32), then.astype(np.float32)
+    sum_now, sum_then = now.sum(axis=-1), then.sum(axis=-1)
+    chroma = np.abs(now / (sum_now[..., None] + 1) - then / (sum_then[..., None] + 1))
+    return chroma.max(axis=-1), (sum_now + 8) / (sum_then + 8), sum_now, sum_then
+
+
+def test_light_change_is_the_reduction_along_the_colour_axis():
+    rng = np.random.default_rng(5)
+    now, then = rng.integers(0, 256, (2, 40, 50, 3), dtype=np.uint8)
+    then[:5] = 0  # dark: the +1 and +8 matter
+    mask = rng.random((40, 50)) < 0.3
+    for a, b in ((now, then), (now[mask], then[mask]), (now[:0], then[:0])):
+        for got, want in zip(light_change(a, b), _light_change_along_last_axis(a, b)):
+            assert got.dtype == want.dtype and got.shape == want.shape
+            np.testing.assert_array_equal(got, want)
+
+
+def test_flat_regions_from_a_shared_gradient():
+    rng = np.random.default_rng(6)
+    rgb = cv2.resize(rng.integers(0, 256, (12, 15, 3), dtype=np.uint8), (61, 47),
+                     interpolation=cv2.INTER_NEAREST)  # odd sides, flat patches
+    half = half_colour_gradient(rgb)
+    for max_gradient in (3.0, 6.0):
+        for got, want in zip(flat_regions(rgb, max_gradient, half), flat_regions(rgb, max_gradient)):
+            np.testing.assert_array_equal(got, want)
+
+
+def test_flat_regions_stats_box_each_region():
+    # trim_flat_background reads the faces on the box of their stats
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        h, w = (int(v) for v in rng.integers(5, 90, 2))
+        blocks = rng.integers(0, 256, (rng.integers(2, 9), rng.integers(2, 9), 3), dtype=np.uint8)
+        rgb = cv2.resize(blocks, (w, h), interpolation=cv2.INTER_NEAREST)
+        _, regions, stats = flat_regions(rgb, 3.0)
+        for i, box in enumerate(ndimage.find_objects(regions)):
+            if box is not None:
+                x, y, bw, bh = stats[i + 1, :4]
+                assert y <= box[0].start and box[0].stop <= y + bh
+                assert x <= box[1].start and box[1].stop <= x + bw
 
 
 def test_nearest_maps_remap_as_the_float_maps():
@@ -114,6 +182,8 @@ def test_touching_pairs_on_the_labelled_box():
     assert touching_pairs(labels, reach=3) == {(1, 2)}  # columns 19 and 22
     assert touching_pairs(labels, reach=2) == set()
     assert touching_pairs(np.zeros((5, 5), np.int32), reach=1) == set()
+    # ids beyond uint16 (float32 morphology)
+    assert touching_pairs(np.where(labels > 0, labels + 70_000, 0), reach=3) == {(70_001, 70_002)}
 
 
 def test_twist_sources_are_the_largest_members_with_motion():
