@@ -214,15 +214,25 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
         i in young or memory.dimmed_share(cur, labels, i, boxes[i - 1]) > OLD_SHADOW_SHARE)]
     if not tested:
         return labels
-    # the box of the tested MotionBits: each lies whole inside it
+    # each tested MotionBit on its own box, or all on the box of them all where that is
+    # smaller (:meth:`StaticMemory.shadowed` gives the whole image's answer, cropped)
     rows, cols = zip(*(boxes[i - 1] for i in tested))
-    box = (slice(min(r.start for r in rows), max(r.stop for r in rows)),
-           slice(min(c.start for c in cols), max(c.stop for c in cols)))
-    shadow = memory.shadowed(cur, box)
-    if shadow is None:
-        return labels
-    lab = labels[box]
-    area = label_areas(lab)
-    dark = run_counts(lab[shadow], len(area))
-    gone = [i for i in tested if dark[i] > share[i] * area[i]]
+    union = (slice(min(r.start for r in rows), max(r.stop for r in rows)),
+             slice(min(c.start for c in cols), max(c.stop for c in cols)))
+    parts = ([(boxes[i - 1], [i]) for i in tested]
+             if sum(_box_area(boxes[i - 1]) for i in tested) < _box_area(union)
+             else [(union, tested)])
+    gone = []
+    for box, members in parts:
+        shadow = memory.shadowed(cur, box)
+        if shadow is None:
+            return labels
+        lab = labels[box]
+        area = label_areas(lab)
+        dark = run_counts(lab[shadow], len(area))
+        gone += [i for i in members if dark[i] > share[i] * area[i]]
     return drop_labels(labels, gone)
+
+
+def _box_area(box: tuple[slice, slice]) -> int:
+    return (box[0].stop - box[0].start) * (box[1].stop - box[1].start)
