@@ -116,7 +116,8 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
         cur_gray, prev_gray: (H, W) float32 grey frames (``prev_gray`` camera-stabilised).
         still: (H, W) float32 grey levels by which "nothing moved" misses each pixel.
         speed: (H, W) float32 length of the backward flow relative to the camera.
-        joined: (H, W) int32 pixels joined at the last frame (their id), carried to this one.
+        joined: (H, W) int32 pixels joined at the last frame, carried to this one, under
+            their group's id (:func:`carried_joins`): a region stays joined to that id.
         move_threshold: px; a pixel's flow moves above this.
         min_area: px; smaller regions never join.
         half_gradient: ``half_colour_gradient(rgb)`` if already computed.
