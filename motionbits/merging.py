@@ -23,6 +23,10 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   piece of that body: it disagrees with every MotionBit its parent disagrees with (a
   pushed drawer, kept apart from the gripper since it was born, comes apart into pieces
   as the flow on its flat front changes; each piece stays apart from the gripper);
+- of two groups that a piece agreed with as often (and as doubtfully), it joins the one
+  whose union motion explained it better on average (a piece of a laptop lid agrees at
+  as many frames with the hand pressing on it as with the lid's other pieces, but more
+  closely with the lid's);
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final between the two; between groups it is
   outweighed when the groups agreed across at ``OUTWEIGH`` times as many frames as they
@@ -190,6 +194,7 @@ class MotionBitGroups:
     def __init__(self, agree: float, disagree: float) -> None:
         self.agree_tol, self.disagree_tol = agree, disagree
         self._agree: dict[tuple[int, int], int] = {}  # frames seen agreeing
+        self._excess: dict[tuple[int, int], float] = {}  # their union excesses, summed
         self._disagree: set[tuple[int, int]] = set()
         self._strikes: dict[tuple[int, int], int] = {}  # frames seen beyond ``disagree``
         self._doubt: set[tuple[int, int]] = set()  # born still beside the other's motion
@@ -208,6 +213,7 @@ class MotionBitGroups:
                 self._forbidden.add(key)
                 self._disagree.add(key)
                 self._agree.pop(key, None)
+                self._excess.pop(key, None)
 
     def inherit(self, child: int, parent: int) -> None:
         """``child``, a piece of ``parent``, disagrees with each MotionBit ``parent``
@@ -234,24 +240,27 @@ class MotionBitGroups:
             if self._strikes[key] >= DISAGREE_FRAMES or excess > AT_ONCE * self.disagree_tol:
                 self._disagree.add(key)
                 self._agree.pop(key, None)
+                self._excess.pop(key, None)
                 del self._strikes[key]
         elif excess <= self.agree_tol:
             self._agree[key] = self._agree.get(key, 0) + 1
+            self._excess[key] = self._excess.get(key, 0.0) + excess
 
     def representatives(self, ids) -> dict[int, int]:
         """id -> the oldest (smallest) id of its group, for ``ids`` present now. Groups
         join greedily along agreeing pairs, the pairs seen agreeing at the most frames
-        first, undoubted pairs (:meth:`doubt`) before doubtful ones: a piece that agreed
+        first, undoubted pairs (:meth:`doubt`) before doubtful ones, then those whose
+        union motion explained both better (the smaller mean excess): a piece that agreed
         with two MotionBits that disagree joins the one it agreed with more often, or
-        without doubt. Two groups do not join across a forbidden pair (:meth:`forbid`),
+        without doubt, or more closely. Two groups do not join across a forbidden pair (:meth:`forbid`),
         nor across pairs that disagreed unless the pairs across them agreed at
         ``OUTWEIGH`` times as many frames as there are disagreeing ones."""
         ids = sorted(int(i) for i in ids)
         present = set(ids)
         rep = {i: i for i in ids}
         members: dict[int, set[int]] = {i: {i} for i in ids}
-        for a, b in sorted(self._agree,
-                           key=lambda key: (-self._agree[key], key in self._doubt, key)):
+        for a, b in sorted(self._agree, key=lambda key: (
+                -self._agree[key], key in self._doubt, self._excess[key] / self._agree[key], key)):
             if a not in present or b not in present:
                 continue
             ra, rb = rep[a], rep[b]
