@@ -24,9 +24,10 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   pushed drawer, kept apart from the gripper since it was born, comes apart into pieces
   as the flow on its flat front changes; each piece stays apart from the gripper);
 - of two groups that a piece agreed with as often (and as doubtfully), it joins the one
-  whose union motion explained it better on average (a piece of a laptop lid agrees at
-  as many frames with the hand pressing on it as with the lid's other pieces, but more
-  closely with the lid's);
+  whose union motion explained it better on average, per px it moved (a piece of a
+  laptop lid agrees at as many frames with the hand pressing on it as with the lid's
+  other pieces, but more closely with the lid's; pieces that barely move agree closely
+  with anything at rest);
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final between the two; between groups it is
   outweighed when the groups agreed across at ``OUTWEIGH`` times as many frames as they
@@ -52,7 +53,7 @@ from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
 
 __all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "standing_still", "seen_still",
-           "drop_seen_still", "observe_touching", "DROP_WIDTH"]
+           "drop_seen_still", "observe_touching", "DROP_WIDTH", "MIN_MOVED"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
 STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
@@ -62,6 +63,9 @@ STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 #: or flat parts DIS reads wrong at that frame (round 7: mIoU 51.1 / 45.4 -> 52.2 / 46.0).
 DISAGREE_FRAMES = 2
 AT_ONCE = 2.0
+#: px/frame: agreements are ranked by their union excess per px of the union's motion
+#: (at least this): two pieces that barely move agree closely whatever they are.
+MIN_MOVED = 0.5
 #: A new MotionBit was born out of still pixels, as far as an older MotionBit can tell, when
 #: more than this share of its nodes came from pixels never in a MotionBit and seen standing
 #: still (:func:`seen_still`) since that MotionBit first moved; and out of one MotionBit's
@@ -194,7 +198,7 @@ class MotionBitGroups:
     def __init__(self, agree: float, disagree: float) -> None:
         self.agree_tol, self.disagree_tol = agree, disagree
         self._agree: dict[tuple[int, int], int] = {}  # frames seen agreeing
-        self._excess: dict[tuple[int, int], float] = {}  # their union excesses, summed
+        self._excess: dict[tuple[int, int], float] = {}  # their excess per px moved, summed
         self._disagree: set[tuple[int, int]] = set()
         self._strikes: dict[tuple[int, int], int] = {}  # frames seen beyond ``disagree``
         self._doubt: set[tuple[int, int]] = set()  # born still beside the other's motion
@@ -229,9 +233,10 @@ class MotionBitGroups:
     def known(self, a: int, b: int) -> bool:
         return self._key(a, b) in self._disagree
 
-    def observe(self, a: int, b: int, excess: float) -> None:
+    def observe(self, a: int, b: int, excess: float, moved: float = MIN_MOVED) -> None:
         """Record one frame's test: ``excess`` = how much worse (grey levels) the union
-        motion explains the worse-explained member than its own motion does."""
+        motion explains the worse-explained member than its own motion does; ``moved``
+        = px the union motion moved the two (mean over their nodes)."""
         key = self._key(a, b)
         if key in self._disagree:
             return
@@ -244,15 +249,15 @@ class MotionBitGroups:
                 del self._strikes[key]
         elif excess <= self.agree_tol:
             self._agree[key] = self._agree.get(key, 0) + 1
-            self._excess[key] = self._excess.get(key, 0.0) + excess
+            self._excess[key] = self._excess.get(key, 0.0) + excess / max(moved, MIN_MOVED)
 
     def representatives(self, ids) -> dict[int, int]:
         """id -> the oldest (smallest) id of its group, for ``ids`` present now. Groups
         join greedily along agreeing pairs, the pairs seen agreeing at the most frames
         first, undoubted pairs (:meth:`doubt`) before doubtful ones, then those whose
-        union motion explained both better (the smaller mean excess): a piece that agreed
-        with two MotionBits that disagree joins the one it agreed with more often, or
-        without doubt, or more closely. Two groups do not join across a forbidden pair (:meth:`forbid`),
+        union motion explained both better (the smaller mean excess per px moved): a
+        piece that agreed with two MotionBits that disagree joins the one it agreed with
+        more often, or without doubt, or more closely. Two groups do not join across a forbidden pair (:meth:`forbid`),
         nor across pairs that disagreed unless the pairs across them agreed at
         ``OUTWEIGH`` times as many frames as there are disagreeing ones."""
         ids = sorted(int(i) for i in ids)
@@ -373,4 +378,5 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
         excess = union_excess(labels, a, b, boxes(), own.get(a, STILL), own.get(b, STILL),
                               union, cur, prev)
         if (a in own and b in own) or excess > disagree:
-            groups.observe(a, b, excess)
+            moved = np.hypot(*(back_points[sel] - grid.points[sel]).T).mean()
+            groups.observe(a, b, excess, float(moved))

@@ -138,6 +138,19 @@ def test_a_piece_joins_the_group_it_agreed_with_more_closely():
     assert groups.representatives([2, 3, 4]) == {2: 2, 3: 3, 4: 2}
 
 
+def test_closeness_is_per_px_moved():
+    """A pushed block's piece 4 agreed at two frames with the gripper 2 as it moved 5 px
+    (excess 1.0) and at two with 3, a piece at rest (0.2 px: excess 0.2). Per px moved
+    the gripper's union explained it better (0.2 against 0.4): pieces that barely move
+    agree closely with anything at rest."""
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    for _ in range(2):
+        groups.observe(2, 4, 1.0, moved=5.0)
+        groups.observe(3, 4, 0.2, moved=0.2)
+    groups.forbid(2, [3])
+    assert groups.representatives([2, 3, 4]) == {2: 2, 3: 3, 4: 2}
+
+
 def test_agreement_across_groups_outweighs_one_disagreeing_pair_not_a_forbidden_one():
     """Two pieces of an arm each (1 + 2, 3 + 4), 1 and 3 agreeing at 4 frames, 2 and 4
     (small pieces read wrong) disagreeing: one group while the agreements across are at
