@@ -58,7 +58,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description=(
             "Run each method on every scene (frames -> last-frame label map), score it with the\n"
             "MoRiBo protocol (see 'motionbits eval') and print Overlap / Boundary P R F1 (mIoU)\n"
-            "per track and averaged over tracks, with seconds per frame."
+            "per track and averaged over tracks, with seconds per frame; on scenes whose meta.json\n"
+            "names each body's kind (motionbits synth), also the mean IoU per kind of body."
         ),
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -84,6 +85,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     from motionbits.baselines import available_methods, make_method
     from motionbits.eval.benchmark import run_benchmark
+    from motionbits.eval.kinds import format_kinds
     from motionbits.eval.table import format_table, json_ready
 
     if args.list:
@@ -122,6 +124,10 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled", seconds_per_frame=spf), end="")
+    kinds = format_kinds(results)
+    if kinds:  # scenes of motionbits synth name their bodies' kinds
+        print()
+        print(kinds, end="")
     if args.json:
         payload = {"methods": results, "seconds_per_frame": spf}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))

@@ -18,6 +18,7 @@ from tqdm import tqdm
 from motionbits.eval.dataset import (
     discover_scenes, load_scene, summarize_tracks,
 )
+from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import write_label_map
 from motionbits.eval.metrics import FrameScores, evaluate_frame
 
@@ -45,7 +46,9 @@ def run_benchmark(
 
     Returns:
         ``(results, seconds_per_frame)``: per method the dict of
-        :func:`motionbits.eval.dataset.evaluate_dataset`, and its mean seconds per frame.
+        :func:`motionbits.eval.dataset.evaluate_dataset` with ``by_kind`` added (mean IoU
+        per track and kind of body, :func:`motionbits.eval.kinds.iou_by_kind`; empty
+        where ``meta.json`` names no kinds), and its mean seconds per frame.
         A method that raises ImportError (its package or model is not installed) is
         dropped with a warning on stderr instead of stopping the run.
 
@@ -60,9 +63,11 @@ def run_benchmark(
     per_scene: dict[str, dict] = {m: {} for m in methods}
     seconds = {m: 0.0 for m in methods}
     unavailable: dict[str, str] = {}
+    kinds: dict[str, dict[int, str]] = {}
     n_frames = 0
     for scene in tqdm(scenes, desc="benchmark", unit="scene", disable=not progress):
         frames, gt, ignore = load_scene(scene)  # the frames and gt.png fit together
+        kinds[scene.key] = body_kinds(scene.path)
         n_frames += len(frames)
         for name, method in methods.items():
             if name in unavailable:
@@ -88,7 +93,8 @@ def run_benchmark(
     for name in methods:
         if name in unavailable:
             continue
-        results[name] = {**summarize_tracks(by_track[name]), "per_scene": per_scene[name]}
+        results[name] = {**summarize_tracks(by_track[name]), "per_scene": per_scene[name],
+                         "by_kind": iou_by_kind(per_scene[name], kinds)}
     if not results:
         raise ImportError(f"no method could run: {unavailable}")
     spf = {m: seconds[m] / max(n_frames, 1) for m in results}

@@ -1,0 +1,54 @@
+"""Mean IoU per kind of body (``meta.json`` labels) in ``motionbits benchmark``."""
+
+import json
+
+import numpy as np
+
+from motionbits.eval.benchmark import run_benchmark
+from motionbits.eval.kinds import body_kinds, format_kinds, iou_by_kind
+from test_eval_dataset import make_scene, squares
+
+
+def test_body_kinds_reads_meta_and_tolerates_free_form(tmp_path):
+    (tmp_path / "meta.json").write_text(json.dumps(
+        {"labels": {"1": {"kind": "laptop"}, "2": {"pixels": 5}, "3": {"kind": "hand"}}}))
+    assert body_kinds(tmp_path) == {1: "laptop", 3: "hand"}
+    for text in ("{}", "[1, 2]", "not json", '{"labels": 3}'):
+        (tmp_path / "meta.json").write_text(text)
+        assert body_kinds(tmp_path) == {}
+    assert body_kinds(tmp_path / "missing") == {}
+
+
+def test_benchmark_scores_each_kind_of_body(tmp_path):
+    shape = (40, 48)
+    gt_a = squares(shape, (5, 5, 10), (20, 25, 10))  # ids 1000 (block), 2000 (hand)
+    gt_b = squares(shape, (8, 8, 12))  # id 1000 (block)
+    for track, name, gt, kinds in (("robot", "a", gt_a, {"1000": "block", "2000": "hand"}),
+                                   ("robot", "b", gt_b, {"1000": "block"})):
+        scene = make_scene(tmp_path / "data" / track, name, gt)
+        (scene / "meta.json").write_text(json.dumps(
+            {"labels": {k: {"kind": v} for k, v in kinds.items()}}))
+
+    def half_of_the_first(frames):
+        """The top half of the first square of each scene (IoU 0.5), nothing else (the
+        scenes come in name order: a, then b)."""
+        out = np.zeros(frames[0].shape[:2], np.int32)
+        gt = (gt_a, gt_b)[len(seen)]
+        seen.append(1)
+        ys, xs = np.nonzero(gt == 1000)
+        out[ys.min():ys.min() + (ys.max() - ys.min() + 1) // 2, xs.min():xs.max() + 1] = 1
+        return out
+
+    seen: list[int] = []
+    results, _ = run_benchmark(tmp_path / "data", {"half": half_of_the_first}, progress=False)
+    by_kind = results["half"]["by_kind"]
+    assert by_kind["robot"]["block"]["n"] == 2
+    assert abs(by_kind["robot"]["block"]["mIoU"] - 0.5) < 1e-6
+    assert by_kind["robot"]["hand"] == {"n": 1, "mIoU": 0.0}
+    text = format_kinds(results)
+    assert "block" in text and "50.0" in text and "0.0" in text
+
+
+def test_no_kinds_no_table():
+    assert iou_by_kind({"t/s": {"instances": [{"gt": 1, "IoU": 0.7}]}}, {"t/s": {}}) == {}
+    assert format_kinds({"m": {"by_kind": {}}}) == ""
