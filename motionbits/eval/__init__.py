@@ -10,10 +10,12 @@ MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
 :mod:`motionbits.eval.dataset`.
     adjusted_rand_index(a, b)                               agreement of two partitions
     scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
+    body_kinds(scene) / iou_by_kind(per_scene, kinds)       mean IoU per kind of body
 """
 
 from motionbits.eval.agreement import adjusted_rand_index
 from motionbits.eval.boundary import boundary_counts, boundary_map, boundary_tolerance
+from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
@@ -36,4 +38,6 @@ __all__ = [
     "read_label_map",
     "write_label_map",
     "scenes_from_sequence",
+    "body_kinds",
+    "iou_by_kind",
 ]
