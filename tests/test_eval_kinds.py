@@ -4,7 +4,9 @@ import json
 
 import numpy as np
 
+from motionbits.eval import write_label_map
 from motionbits.eval.benchmark import run_benchmark
+from motionbits.eval.dataset import evaluate_dataset
 from motionbits.eval.kinds import body_kinds, format_kinds, iou_by_kind
 from test_eval_dataset import make_scene, squares
 
@@ -52,3 +54,13 @@ def test_benchmark_scores_each_kind_of_body(tmp_path):
 def test_no_kinds_no_table():
     assert iou_by_kind({"t/s": {"instances": [{"gt": 1, "IoU": 0.7}]}}, {"t/s": {}}) == {}
     assert format_kinds({"m": {"by_kind": {}}}) == ""
+
+
+def test_eval_of_saved_predictions_scores_each_kind(tmp_path):
+    gt = squares((40, 48), (5, 5, 10), (20, 25, 10))  # ids 1000 (lid), 2000 (hand)
+    scene = make_scene(tmp_path / "gt" / "hand", "a", gt)
+    (scene / "meta.json").write_text(json.dumps(
+        {"labels": {"1000": {"kind": "laptop"}, "2000": {"kind": "hand"}}}))
+    write_label_map(tmp_path / "pred" / "hand" / "a.png", np.where(gt == 2000, 5, 0))
+    by_kind = evaluate_dataset(tmp_path / "gt", tmp_path / "pred", progress=False)["by_kind"]
+    assert by_kind == {"hand": {"hand": {"n": 1, "mIoU": 1.0}, "laptop": {"n": 1, "mIoU": 0.0}}}

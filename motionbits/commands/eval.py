@@ -48,6 +48,7 @@ def parse_pred_spec(spec: str) -> tuple[str, Path]:
 
 def run(args: argparse.Namespace) -> int:
     from motionbits.eval.dataset import evaluate_dataset
+    from motionbits.eval.kinds import format_kinds
     from motionbits.eval.table import format_table, json_ready
 
     if args.json:
@@ -65,6 +66,10 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled"), end="")
+    kinds = format_kinds(results)
+    if kinds:  # scenes of motionbits synth name their bodies' kinds
+        print()
+        print(kinds, end="")
     if args.json:
         payload = next(iter(results.values())) if len(results) == 1 else {"methods": results}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))

@@ -24,6 +24,7 @@ from typing import Callable
 import numpy as np
 from tqdm import tqdm
 
+from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 
@@ -242,14 +243,17 @@ def evaluate_dataset(
     Returns:
         :func:`summarize_tracks` of the scenes (``"macro"``, ``"pooled"``,
         ``"false_positives"`` averaged over tracks, ``"tracks"``) and ``"per_scene":
-        {"track/scene": FrameScores.to_dict()}``; scores are fractions in [0, 1] except
-        ``spurious`` (predicted objects per scene).
+        {"track/scene": FrameScores.to_dict()}`` and ``"by_kind"`` (mean IoU per track and
+        kind of body, :func:`motionbits.eval.kinds.iou_by_kind`; empty where ``meta.json``
+        names no kinds); scores are fractions in [0, 1] except ``spurious`` (predicted
+        objects per scene).
     """
     if missing not in ("error", "empty"):
         raise ValueError(f"missing must be 'error' or 'empty', got {missing!r}")
     scenes = discover_scenes(gt_root)
     by_track: dict[str, list[FrameScores]] = {}
     per_scene = {}
+    kinds: dict[str, dict[int, str]] = {}
     for scene in tqdm(scenes, desc="evaluate", unit="scene", disable=not progress):
         gt, ignore = load_ground_truth(scene)
         if callable(predict):
@@ -272,4 +276,6 @@ def evaluate_dataset(
             raise ValueError(f"scene {scene.key}: {exc}") from exc
         by_track.setdefault(scene.track, []).append(scores)
         per_scene[scene.key] = scores.to_dict()
-    return {**summarize_tracks(by_track), "per_scene": per_scene}
+        kinds[scene.key] = body_kinds(scene.path)
+    return {**summarize_tracks(by_track), "per_scene": per_scene,
+            "by_kind": iou_by_kind(per_scene, kinds)}
