@@ -135,9 +135,7 @@ class Arrivals:
             still = np.zeros(labels.shape, bool)  # on the labels' box (standing[0] is False)
             labelled = nonzero_box(labels)
             still[labelled] = np.take(standing, labels[labelled])
-            rows, cols = np.flatnonzero(still.any(axis=1)), np.flatnonzero(still.any(axis=0))
-            box = grow_box((slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)),
-                           reach, labels.shape)
+            box = grow_box(nonzero_box(still), reach, labels.shape)
             candidate[box] |= cv2.dilate(still[box].view(np.uint8),
                                          np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
         candidate &= self.known & (labels == 0)
@@ -146,9 +144,7 @@ class Arrivals:
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
         # everything below happens on the box of the candidates
         # (grown by the window's reach, so that its means are the whole image's)
-        rows, cols = np.flatnonzero(candidate.any(axis=1)), np.flatnonzero(candidate.any(axis=0))
-        box = grow_box((slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)),
-                       WINDOW // 2, labels.shape)
+        box = grow_box(nonzero_box(candidate), WINDOW // 2, labels.shape)
         changed = _color_difference(cur[box], self.background[box]) > self.covered
         still = cv2.blur(cv2.absdiff(cur_gray[box], prev_gray[box]), (WINDOW, WINDOW)) < self.rest
         mask = (candidate[box] & changed & still).view(np.uint8)

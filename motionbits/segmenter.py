@@ -388,8 +388,9 @@ class MotionBitsSegmenter:
                                                 cfg.ransac_threshold)
             # ids carried validly (np.unique's result, without its sort)
             carried = nonzero_box(prior)
+            carried_ids = prior[carried]
             kept = np.setdiff1d(np.flatnonzero(run_counts(
-                prior[carried][prior_valid[carried] & (prior[carried] > 0)])), ids)
+                carried_ids[prior_valid[carried] & (carried_ids > 0)])), ids)
             kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
             carried_earned = earned
             speed = cv2.magnitude(flow_m[..., 0], flow_m[..., 1])  # (h, w) px the pixel moves
