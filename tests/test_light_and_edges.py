@@ -301,20 +301,49 @@ def test_overhangs_of_several_bodies_onto_one_flat_table_are_all_trimmed():
 
 def test_a_flat_face_mostly_inside_its_mask_is_completed_a_half_one_is_not():
     """A flat body whose mask has gaps (its flow read no motion in patches) gets the gaps;
-    one whose mask covers only half of it is not grown: half is no evidence that the
-    rest moved, and the flat table around a body is never taken."""
+    one whose mask covers only half of it is not grown where the face reaches the image
+    border (half is no evidence that the rest moved), and the flat table around a body is
+    never taken."""
     rgb = np.full((240, 320, 3), (225, 225, 220), np.uint8)  # a flat white table
     rgb[40:200, 30:70] = (120, 40, 160)  # a long flat purple link
-    rgb[40:120, 200:240] = (40, 160, 40)  # a flat green body
+    rgb[0:120, 200:240] = (40, 160, 40)  # a flat green body entering at the top
     labels = np.zeros((240, 320), np.int32)
     labels[40:200, 30:70] = 1
     labels[60:80, 30:50] = 0  # gaps reaching the link's outline: no hole to fill
     labels[150:175, 45:70] = 0
-    labels[40:80, 200:240] = 2  # half of the green body
+    labels[0:60, 200:240] = 2  # half of the green body
     labels[200:210, 30:70] = 1  # and a little spill of the link onto the table
     out = trim_flat_background(labels, rgb)
     assert (out[44:196, 34:66] == 1).all()  # all but the link's outline (not flat)
-    assert (out[40:120, 200:240] == 2).sum() == (labels == 2).sum()
+    assert (out[0:120, 200:240] == 2).sum() == (labels == 2).sum()
     table = rgb[..., 1] == 225
     far = ndimage.distance_transform_edt(table) > 4  # beyond the bodies' outlines
     assert not out[far].any()  # nothing of the table, the spill trimmed
+
+
+def test_a_closed_face_partly_in_a_mask_seen_whole_is_completed():
+    """A block seen whole whose flow read motion on its side and on a part of its flat
+    front only: the front is closed by its edges and not much larger than the mask, so
+    the mask takes it. Not where the mask reaches the image border (an arm crossing a
+    table square), covers under a third of the front, or is under half of the front."""
+    rgb = np.full((240, 320, 3), (225, 225, 220), np.uint8)  # a flat white table
+    rgb[40:140, 40:120] = (150, 60, 40)  # a flat brown front, closed by its edges
+    rgb[40:140, 120:180] = (90, 30, 20)  # the block's darker side
+    front = np.zeros((240, 320), bool)
+    front[40:140, 40:120] = True
+    labels = np.zeros((240, 320), np.int32)
+    labels[40:140, 120:140] = 1  # the side's near part ...
+    labels[40:80, 40:120] = 1  # ... and 40% of the front
+    out = trim_flat_background(labels, rgb)
+    assert (out[44:136, 44:116] == 1).all()  # all but its outline (not flat)
+    assert not out[rgb[..., 1] == 225].any()  # not the table
+    arm = labels.copy()
+    arm[0:40, 70:90] = 1  # the same mask reaching the top border: an arm
+    assert not trim_flat_background(arm, rgb)[front & (labels == 0)].any()
+    little = np.zeros_like(labels)
+    little[40:140, 120:180] = 1  # the whole side and a fifth of the front
+    little[40:60, 40:120] = 1
+    assert not trim_flat_background(little, rgb)[front & (little == 0)].any()
+    alone = np.zeros_like(labels)
+    alone[40:80, 40:120] = 1  # 40% of the front and nothing else: the front is 2.5x it
+    assert not trim_flat_background(alone, rgb)[front & (alone == 0)].any()
