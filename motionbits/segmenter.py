@@ -20,6 +20,7 @@ from motionbits.backend import make_ops
 from motionbits.boxes import label_areas, nonzero_box, run_counts
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
+from motionbits.completion import complete_masks
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
     appearance_consistent, forgive_misalignment, gradient_magnitude, motion_gain, pull_back,
@@ -498,6 +499,8 @@ class MotionBitsSegmenter:
             shown = trim_flat_background(hide_edgeless(shown, gradient), cur, half_gradient)
             shown = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
+            # and each mark seen whole takes the rest of its body by colour (GrabCut)
+            shown = complete_masks(shown, cur)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

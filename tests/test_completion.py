@@ -1,0 +1,66 @@
+"""Completing a precise but partial mark to its body by colour (motionbits.completion)."""
+
+import cv2
+import numpy as np
+
+from motionbits.completion import complete_masks
+
+
+def _table(seed: int = 0) -> np.ndarray:
+    """(240, 320, 3) uint8 green-grey table texture, smooth over 4 px."""
+    noise = np.random.default_rng(seed).uniform(0, 255, (60, 80, 3)).astype(np.float32)
+    tex = cv2.resize(noise, (320, 240), interpolation=cv2.INTER_CUBIC)
+    return np.clip(tex * (0.25, 0.45, 0.3) + (60, 90, 60), 0, 255).astype(np.uint8)
+
+
+def _scene() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A red block (rows 80:140, cols 120:180) on the table, its mask the lower 40% of it
+    (where the flow read its motion)."""
+    rgb = _table()
+    body = np.zeros((240, 320), bool)
+    body[80:140, 120:180] = True
+    rgb[body] = (200, 40, 40)
+    labels = np.zeros((240, 320), np.int32)
+    labels[116:140, 120:180] = 3
+    return rgb, body, labels
+
+
+def test_a_partial_mask_takes_the_rest_of_its_body_and_none_of_the_table():
+    rgb, body, labels = _scene()
+    out = complete_masks(labels, rgb)
+    assert (out[body] == 3).mean() > 0.97
+    assert (out[~body] == 0).all()
+    assert (labels == 3).sum() == 24 * 60  # the input is not written to
+
+
+def test_no_completion_for_a_mask_at_the_border_nor_over_another_mask():
+    rgb, body, labels = _scene()
+    arm = labels.copy()
+    arm[0:116, 145:155] = 3  # the same mask reaching the top border: an arm entering
+    assert complete_masks(arm, rgb) is arm
+    other = labels.copy()
+    other[80:100, 120:180] = 5  # another MotionBit on the block's top
+    out = complete_masks(other, rgb)
+    assert (out[80:100, 120:180] == 5).all()
+    assert (out[102:116, 122:178] == 3).all()
+
+
+def test_the_same_frame_gives_the_same_marks_whatever_ran_before():
+    """GrabCut draws its first colour models at random (OpenCV's global generator): the
+    marks must not depend on the state others left it in."""
+    rgb = _table(3)
+    patches = np.random.default_rng(3).uniform(0, 255, (9, 9, 3)).astype(np.uint8)
+    rgb[60:150, 100:190] = cv2.resize(patches, (90, 90), interpolation=cv2.INTER_NEAREST)
+    labels = np.zeros((240, 320), np.int32)
+    labels[120:150, 100:190] = 2  # a third of a body of many colours
+    outs = []
+    for seed in range(1000, 1004):
+        cv2.setRNGSeed(seed)
+        outs.append(complete_masks(labels, rgb))
+    assert all(np.array_equal(out, outs[0]) for out in outs)
+
+
+def test_nothing_to_complete():
+    rgb, _, labels = _scene()
+    empty = np.zeros_like(labels)
+    assert complete_masks(empty, rgb) is empty
