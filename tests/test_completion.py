@@ -1,4 +1,4 @@
-"""Completing a precise but partial mark to its body by colour (motionbits.completion)."""
+"""Completing a resting body's precise but partial mark by colour (motionbits.completion)."""
 
 import cv2
 import numpy as np
@@ -58,6 +58,13 @@ def test_the_same_frame_gives_the_same_marks_whatever_ran_before():
         cv2.setRNGSeed(seed)
         outs.append(complete_masks(labels, rgb))
     assert all(np.array_equal(out, outs[0]) for out in outs)
+
+
+def test_a_moving_mask_is_left_as_it_is():
+    """A MotionBit moving now keeps the mask its motion gives; one at rest is completed."""
+    rgb, body, labels = _scene()
+    assert complete_masks(labels, rgb, moving={3}) is labels
+    assert (complete_masks(labels, rgb, moving={7})[body] == 3).mean() > 0.97
 
 
 def test_nothing_to_complete():
