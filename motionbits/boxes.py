@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["grow_box", "label_areas", "label_boxes", "nonzero_box", "run_counts",
+__all__ = ["at_border", "grow_box", "label_areas", "label_boxes", "nonzero_box", "run_counts",
            "run_starts"]
 
 
@@ -40,6 +40,15 @@ def run_counts(values: np.ndarray, minlength: int = 0) -> np.ndarray:
     # run lengths summed per value: exact integers in float64
     return np.bincount(values[start], weights=np.diff(start, append=values.size),
                        minlength=minlength).astype(np.intp)
+
+
+def at_border(label_map: np.ndarray) -> np.ndarray:
+    """(max label + 1,) bool: which labels of an (H, W) non-negative integer label map
+    have pixels on the image's border (index 0, the background, included)."""
+    touch = np.zeros(int(label_map.max()) + 1, bool)
+    for edge in (label_map[0], label_map[-1], label_map[:, 0], label_map[:, -1]):
+        touch[edge] = True
+    return touch
 
 
 def label_areas(label_map: np.ndarray) -> np.ndarray:

@@ -25,7 +25,7 @@ from collections.abc import Collection
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import at_border, label_boxes
 
 __all__ = ["complete_masks", "COMPLETION_REACH", "COMPLETION_SIDE"]
 
@@ -60,13 +60,11 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray,
     if not label_map.any():
         return label_map
     height, width = label_map.shape
-    at_border = np.zeros(int(label_map.max()) + 1, bool)
-    for edge in (label_map[0], label_map[-1], label_map[:, 0], label_map[:, -1]):
-        at_border[edge] = True
+    border = at_border(label_map)
     out = label_map
     for i, box in enumerate(label_boxes(label_map)):
         label = i + 1
-        if box is None or at_border[label] or label in moving:
+        if box is None or border[label] or label in moving:
             continue
         side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
         reach = int(COMPLETION_REACH * side) + COMPLETION_MARGIN

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from motionbits.aperture import flat_regions
-from motionbits.boxes import grow_box, label_areas, label_boxes
+from motionbits.boxes import at_border, grow_box, label_areas, label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
@@ -321,10 +321,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     # a closed flat region, a good part inside a mask seen whole, is that body's face too
     x, y, w, h = (stats[region, i] for i in range(4))
     closed = (x > 0) & (y > 0) & (x + w < label_map.shape[1]) & (y + h < label_map.shape[0])
-    whole = np.ones(int(label_map.max()) + 1, bool)
-    for edge in (label_map[0], label_map[-1], label_map[:, 0], label_map[:, -1]):
-        whole[edge] = False
-    face |= (closed & whole[label] & (share >= CLOSED_FACE_SHARE)
+    face |= (closed & ~at_border(label_map)[label] & (share >= CLOSED_FACE_SHARE)
              & (area[region] <= CLOSED_FACE_GROWTH * label_areas(label_map)[label]))
     if face.any():
         owner = np.zeros(len(area), np.int32)  # region -> the mask it belongs to (0: none)
