@@ -26,6 +26,7 @@ import cv2
 import numpy as np
 
 from motionbits.boxes import at_border, label_boxes
+from motionbits.revealed import SHADOW_CHROMA, SHADOW_GAIN
 
 __all__ = ["complete_masks", "COMPLETION_REACH", "COMPLETION_SIDE"]
 
@@ -41,6 +42,9 @@ COMPLETION_SIDE = 96
 #: ... for this many iterations (2: the same mIoU on the last frames of the pickplace
 #: and seed-7 robot / hand scenes).
 COMPLETION_ITERATIONS = 1
+#: px: a pixel the cut gives to a body is the table under a shadow where it has the
+#: chromaticity of the background within this window, dimmed (:func:`_shadowed`).
+COMPLETION_SHADOW_WINDOW = 31
 
 
 def complete_masks(label_map: np.ndarray, rgb: np.ndarray,
@@ -87,11 +91,36 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray,
         joined[pieces[mask & body]] = True
         joined[0] = False
         new = joined[pieces] & free
+        # ... less the table under a shadow (the body's own cast shadow is its colour)
+        new &= ~_shadowed(rgb[rows, cols], free & ~new)
         if new.any():
             if out is label_map:
                 out = label_map.copy()
             out[rows, cols][new] = label
     return out
+
+
+def _shadowed(rgb: np.ndarray, background: np.ndarray) -> np.ndarray:
+    """(h, w) bool: pixels of ``rgb`` (h, w, 3) uint8 that look like the ``background``
+    pixels (h, w) bool within ``COMPLETION_SHADOW_WINDOW`` px of them, under a shadow: the
+    same chromaticity (each of red and green over the sum of the three, within
+    :data:`motionbits.revealed.SHADOW_CHROMA`) at a fraction of their brightness in
+    :data:`motionbits.revealed.SHADOW_GAIN` -- a shadow dims the light on a surface, not
+    its colour."""
+    light = rgb.astype(np.float32) + 1.0
+    total = light.sum(axis=2)
+    weight = background.astype(np.float32)
+    window = (COMPLETION_SHADOW_WINDOW, COMPLETION_SHADOW_WINDOW)
+    seen = cv2.blur(weight, window)
+    near = seen > 0.05
+    seen += 1e-6
+    shadow = near.copy()
+    for c in range(2):
+        chroma = light[..., c] / total
+        around = cv2.blur(chroma * weight, window) / seen
+        shadow &= np.abs(chroma - around) < SHADOW_CHROMA
+    around = cv2.blur(total * weight, window) / seen
+    return shadow & (total > SHADOW_GAIN[0] * around) & (total < SHADOW_GAIN[1] * around)
 
 
 def _grab_cut(rgb: np.ndarray, trimap: np.ndarray) -> np.ndarray | None:

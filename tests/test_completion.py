@@ -71,3 +71,20 @@ def test_nothing_to_complete():
     rgb, _, labels = _scene()
     empty = np.zeros_like(labels)
     assert complete_masks(empty, rgb) is empty
+
+
+def test_the_table_under_a_shadow_is_told_from_a_dark_body():
+    """A cast shadow dims the table's light, not its colour: the table's chromaticity at
+    a fraction of its brightness is shadow; a dark body of another hue is not."""
+    from motionbits.completion import _shadowed
+
+    rgb = cv2.GaussianBlur(_table(2), (0, 0), 4).astype(np.float32)  # a smooth table
+    rgb[100:140, 40:52] *= 0.4  # a band of it under a shadow
+    rgb = rgb.astype(np.uint8)
+    rgb[100:140, 200:240] = (60, 30, 70)  # a dark purple body
+    background = np.ones((240, 320), bool)
+    background[100:140, 40:52] = background[100:140, 200:240] = False
+    shadow = _shadowed(rgb, background)
+    assert shadow[100:140, 40:52].mean() > 0.9
+    assert not shadow[100:140, 200:240].any()
+    assert shadow[background].mean() < 0.05  # the lit table, but for its darkest specks
