@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.boxes import at_border
 from motionbits.flow import pixel_grid, sample_maps
 from motionbits.nodes import sample_bilinear
 from motionbits.parallax import epipolar_distance, fit_epipole, parallax_field
@@ -155,8 +156,9 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
 def _reaching_border(mask: np.ndarray) -> np.ndarray:
     """(rows, cols) bool: the 8-connected parts of ``mask`` that touch the grid's border."""
     comp, _ = ndimage.label(mask, structure=np.ones((3, 3), bool))
-    edge = np.unique(np.concatenate([comp[0], comp[-1], comp[:, 0], comp[:, -1]]))
-    return np.isin(comp, edge[edge > 0])
+    touch = at_border(comp)
+    touch[0] = False  # label 0: outside the mask
+    return touch[comp]
 
 
 class CameraMotion(NamedTuple):

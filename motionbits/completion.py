@@ -91,8 +91,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray,
         joined[pieces[mask & body]] = True
         joined[0] = False
         new = joined[pieces] & free
-        # ... less the table under a shadow (the body's own cast shadow is its colour)
-        new &= ~_shadowed(rgb[rows, cols], free & ~new)
+        if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
+            new &= ~_shadowed(rgb[rows, cols], free & ~new)
         if new.any():
             if out is label_map:
                 out = label_map.copy()

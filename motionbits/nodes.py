@@ -9,6 +9,8 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
+from motionbits.boxes import at_border
+
 __all__ = ["NodeGrid", "binary_fill_holes", "sample_bilinear"]
 
 
@@ -123,7 +125,6 @@ def binary_fill_holes(mask: np.ndarray) -> np.ndarray:
     """(H, W) bool ``mask`` with its holes filled: the background not 4-connected to the
     image border (``scipy.ndimage.binary_fill_holes``, through OpenCV's faster labelling)."""
     n, lab = cv2.connectedComponents((~mask).astype(np.uint8), connectivity=4)
-    outside = np.zeros(n, bool)
-    outside[np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]])] = True
+    outside = at_border(lab)  # (n,): every label 0..n-1 is present
     outside[0] = False  # label 0: the mask itself
     return mask | ~np.take(outside, lab)  # np.take: faster than outside[lab] (int32)
