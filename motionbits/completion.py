@@ -140,7 +140,8 @@ def _grab_cut(rgb: np.ndarray, trimap: np.ndarray) -> np.ndarray | None:
     if not fg.any() or fg.all():
         return None
     # GrabCut seeds its colour models by k-means++ from OpenCV's global random generator:
-    # seeded here, the same frames give the same marks in any order and process
+    # seeded here, the same frames give the same marks in any order and process (this
+    # resets that generator for any other user of it in the process)
     cv2.setRNGSeed(0)
     try:
         cv2.grabCut(image, small, None, np.zeros((1, 65)), np.zeros((1, 65)),
