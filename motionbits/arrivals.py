@@ -31,8 +31,10 @@ not larger than that MotionBit has been seen, is the rest of that body and takes
 (a block set down is often marked only where the carrier's motion showed on it; the rest
 of it stands beside that mark, unlike the table seen there before); any other piece that
 lies mostly where a MotionBit passed takes the id of the MotionBit that last covered it
-there, if that one stands still beside it, and else becomes a new MotionBit, shown from
-the next frame if it still stands there (as SetDown's pieces). Under a moving camera the
+there, if that one stands still beside it, and else becomes a new MotionBit, confirmed at
+the next frame if it still stands there (as SetDown's pieces): shown at once if it is
+solid and no moving MotionBit surrounds it, else from the next frame
+(:meth:`motionbits.setdown.SetDown.adopt`; README, "Bodies that arrived", round 21). Under a moving camera the
 memory follows the static world's model (homography and parallax) before each search.
 It is folded in with :class:`motionbits.revealed.StaticMemory`'s pixels seen still, so it
 is off when that memory is (config ``reveal_tolerance`` = 0).

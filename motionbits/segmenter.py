@@ -431,7 +431,7 @@ class MotionBitsSegmenter:
                 labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving),
                 moving, int(round(max(grid.cell))), self._next_id)
             earned = earned | held
-            self._setdown.adopt(born, labels)
+            self._setdown.adopt(born, labels, grid.cell, moving)
             for i in self._setdown.pending:
                 self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)
 
@@ -458,9 +458,9 @@ class MotionBitsSegmenter:
             group_of = dict(rep)  # each present id's group, shown or not
             # a MotionBit born this frame is shown once it moves again, or as part of a
             # group that is already shown; a piece set down, once it still stands at the
-            # next frame
+            # next frame (a solid body found at rest where the static world was, at once)
             shown = {r for i, r in rep.items()
-                     if i not in self._tentative and i not in self._setdown.pending}
+                     if i not in self._tentative and i not in self._setdown.held_back}
             rep = {i: r if r in shown else 0 for i, r in rep.items()}
 
         with self._stage("bookkeeping"):

@@ -32,19 +32,20 @@ State: the last ``WINDOW`` grey frames and each MotionBit's motion at those fram
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
-from motionbits.boxes import grow_box, label_areas
+from motionbits.boxes import grow_box, label_areas, nonzero_box
 from motionbits.evidence import photometric_residual
 from motionbits.merging import STILL
 from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
 from motionbits.twists import rigid_matrix
 
 __all__ = ["SetDown", "SETDOWN_CELLS", "EARNED_SHARE", "COMPACT_SHARE", "COMPACT_CELLS",
-           "REST_SHARE", "NEW_SHARE", "WINDOW"]
+           "REST_SHARE", "NEW_SHARE", "WINDOW", "SOLID_CELLS", "BESIDE_MOVING_SHARE"]
 
 #: A piece left behind must cover at least this many grid cells ...
 SETDOWN_CELLS = 8
@@ -63,6 +64,12 @@ WINDOW = 3
 NEW_SHARE = 0.5
 #: At the next frame it is confirmed if it still holds this share of its area.
 REST_SHARE = 0.5
+#: A piece found at rest otherwise (:meth:`SetDown.adopt`) is shown at once if an opening
+#: by a square of this many grid cells keeps ``COMPACT_SHARE`` of it (a block, not the
+#: sliver a moving shadow's edge leaves) ...
+SOLID_CELLS = 2
+#: ... and moving MotionBits hold less than this share of the ring around it.
+BESIDE_MOVING_SHARE = 1 / 3
 
 
 @dataclass
@@ -84,13 +91,16 @@ class SetDown:
             below this (config ``carry_tolerance``).
 
     Attributes:
-        pending: new id -> its area (px) at birth, for pieces not yet confirmed (not shown).
+        pending: new id -> its area (px) at birth, for pieces not yet confirmed.
+        held_back: the pending ids not shown until they are confirmed (all of this class's
+            own pieces; not the solid ones :meth:`adopt` takes).
         parent: new id -> the id of the MotionBit it was left behind by.
     """
 
     evidence: float
     rest: float
     pending: dict[int, int] = field(default_factory=dict)
+    held_back: set[int] = field(default_factory=set)
     parent: dict[int, int] = field(default_factory=dict)
     _past: deque = field(default_factory=lambda: deque(maxlen=WINDOW))
 
@@ -126,6 +136,7 @@ class SetDown:
             if m.sum() < REST_SHARE * area or _mean_still(cur, prev, m) > self.rest:
                 out = np.where(m, 0, out)
         self.pending = {}
+        self.held_back = set()
         if self.parent:  # forget the parents of pieces that are gone
             present = set(np.unique(out).tolist())
             self.parent = {i: p for i, p in self.parent.items() if i in present}
@@ -199,17 +210,40 @@ class SetDown:
                 if new is None:
                     new, next_id = next_id, next_id + 1
                     self.pending[new] = int(piece.sum())
+                    self.held_back.add(new)
                     self.parent[new] = int(lab)
                 out[box][piece] = new
                 held[box][piece] = True
         return out, held, next_id
 
-    def adopt(self, pieces: dict[int, int], labels: np.ndarray) -> None:
-        """Take new MotionBits found otherwise (id -> the id they were left by) as pieces
-        set down at this frame: shown from the next frame, if they still stand there."""
+    def adopt(self, pieces: dict[int, int], labels: np.ndarray, cell: tuple[float, float],
+              moving: Collection[int]) -> None:
+        """Take new MotionBits found at rest otherwise (:class:`motionbits.arrivals.Arrivals`;
+        id -> the id they were left by) as pieces set down at this frame, confirmed at the
+        next frame if they still stand there. A solid piece (an opening by a square of
+        ``SOLID_CELLS`` grid cells keeps ``COMPACT_SHARE`` of it) is shown at once, unless
+        a moving MotionBit holds ``BESIDE_MOVING_SHARE`` of the ring around it (then it may
+        be a part of that body its motion missed); the others from the next frame.
+
+        Args:
+            pieces: new id -> the id of the MotionBit that last covered it.
+            labels: (H, W) int32 label map of this frame, with the pieces.
+            cell: (w, h) px of one grid cell.
+            moving: ids of the MotionBits that move now.
+        """
+        side = max(1, int(round(SOLID_CELLS * max(cell))))
+        square = np.ones((side, side), np.uint8)
         for i, parent in pieces.items():
-            self.pending[i] = int(np.count_nonzero(labels == i))
+            piece = labels == i
+            self.pending[i] = int(np.count_nonzero(piece))
             self.parent[i] = parent
+            box = grow_box(nonzero_box(piece), side, labels.shape)
+            inside = piece[box].view(np.uint8)
+            ring = labels[box][(cv2.dilate(inside, square) > 0) & ~piece[box]]
+            solid = (np.count_nonzero(cv2.morphologyEx(inside, cv2.MORPH_OPEN, square))
+                     >= COMPACT_SHARE * self.pending[i])
+            if not solid or np.isin(ring, list(moving)).mean() >= BESIDE_MOVING_SHARE:
+                self.held_back.add(i)
 
     def _came_with(self, lab: int, cur: np.ndarray, mask: np.ndarray,
                    cam: np.ndarray | None) -> tuple[float, float]:

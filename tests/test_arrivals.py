@@ -8,6 +8,7 @@ import pytest
 
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.arrivals import Arrivals
+from motionbits.setdown import SetDown
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
 SIZE = (240, 320)
@@ -197,3 +198,35 @@ def test_a_block_carried_hidden_gets_a_motionbit_of_its_own_once_uncovered(seed)
     assert mine > 0 and counts.max() >= 0.25 * block.sum(), (ids, counts)
     assert (last.labels[carrier] == mine).mean() < 0.05  # not the carrier's MotionBit
     assert not {mb.id: mb for mb in last.motionbits}[mine].moving
+
+
+@pytest.mark.parametrize("shape, around, moving, shown", [
+    ("block", 0, set(), True),      # a block found at rest: shown at once
+    ("sliver", 0, set(), False),    # a shadow edge's sliver: only once it still stands
+    ("block", 7, {7}, False),       # inside a moving mark: maybe a part its motion missed
+    ("block", 7, set(), True),      # inside a mark at rest: shown
+])
+def test_a_solid_arrival_is_shown_at_once_unless_a_moving_mark_surrounds_it(
+        shape, around, moving, shown):
+    labels = np.zeros((120, 160), np.int32)
+    labels[30:80, 40:90] = around
+    if shape == "block":
+        labels[BLOCK] = 8
+    else:
+        labels[BLOCK[0], 50:53] = 8  # 30 x 3 px
+    setdown = SetDown(evidence=3.0, rest=REST)
+    setdown.adopt({8: 7}, labels, CELL, moving)
+    assert setdown.pending == {8: int((labels == 8).sum())} and setdown.parent == {8: 7}
+    assert (8 not in setdown.held_back) == shown
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_block_carried_hidden_is_shown_the_frame_it_is_found(seed):
+    """The carrier uncovers the block over frames 10-12; found at rest at frame 12, it is
+    marked then (a piece that waits to be confirmed shows from frame 13)."""
+    clip = _hidden_carry(seed)
+    result = list(segment_video(clip.frames, CONFIG))[12]
+    block = clip.labels[12] == 1
+    ids, counts = np.unique(result.labels[block], return_counts=True)
+    counts[ids == 0] = 0
+    assert counts.max() >= 0.5 * block.sum(), (ids, counts)
