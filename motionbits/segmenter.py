@@ -499,8 +499,9 @@ class MotionBitsSegmenter:
             shown = trim_flat_background(hide_edgeless(shown, gradient), cur, half_gradient)
             shown = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
-            # and each mark at rest, seen whole, takes the rest of its body by colour
-            shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving})
+            # and each mark seen whole takes the rest of its body by colour (a moving one
+            # only where its outline stops inside its body)
+            shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

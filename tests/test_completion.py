@@ -4,6 +4,7 @@ import cv2
 import numpy as np
 
 from motionbits.completion import complete_masks
+from motionbits.evidence import gradient_magnitude
 
 
 def _table(seed: int = 0) -> np.ndarray:
@@ -60,10 +61,16 @@ def test_the_same_frame_gives_the_same_marks_whatever_ran_before():
     assert all(np.array_equal(out, outs[0]) for out in outs)
 
 
-def test_a_moving_mask_is_left_as_it_is():
-    """A MotionBit moving now keeps the mask its motion gives; one at rest is completed."""
+def test_a_moving_mask_is_completed_only_where_its_outline_stops_inside_its_body():
+    """A MotionBit moving now keeps the mask its motion gives where that mask's outline runs
+    along image edges; where a quarter of it crosses its body's flat colour, it is
+    completed too (and without the image's gradient, never)."""
     rgb, body, labels = _scene()
+    gradient = gradient_magnitude(cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32))
     assert complete_masks(labels, rgb, moving={3}) is labels
+    assert (complete_masks(labels, rgb, moving={3}, gradient=gradient)[body] == 3).mean() > 0.97
+    whole = np.where(body, 3, 0).astype(np.int32)
+    assert complete_masks(whole, rgb, moving={3}, gradient=gradient) is whole
     assert (complete_masks(labels, rgb, moving={7})[body] == 3).mean() > 0.97
 
 
