@@ -6,7 +6,8 @@ mask found there is precise but partial. Each shown mask of a MotionBit at rest 
 whole (it reaches no image border: not an arm or hand that enters the frame), is grown by
 OpenCV's GrabCut (colour models of the mask and of its surroundings, cut along the image's
 edges) within a box around it: the pixels the cut gives to the body, joined to the mask
-and not another mask's, are the body's too. This is the last step on the shown masks
+and not another mask's, are the body's too -- unless they run out to the box's frame
+(a mark spilled onto a plain table would take the table as far as the box goes). This is the last step on the shown masks
 (after specks and small marks are hidden: a speck grown by its colours would be shown);
 the segmenter's state keeps the motion's masks.
 
@@ -72,7 +73,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
-        colours take (``label_map`` itself if none takes any).
+        colours take within its box, where they stay off the box's frame
+        (``label_map`` itself if none takes any).
     """
     if not label_map.any():
         return label_map
@@ -109,6 +111,10 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         new = joined[pieces] & free
         if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
             new &= ~_shadowed(rgb[rows, cols], free & ~new)
+        reach_edge = COMPLETION_FRAME + 1
+        if (new[:reach_edge].any() or new[-reach_edge:].any() or new[:, :reach_edge].any()
+                or new[:, -reach_edge:].any()):
+            continue  # the cut ran out of its box: not this body's rest
         if new.any():
             if out is label_map:
                 out = label_map.copy()

@@ -95,3 +95,15 @@ def test_the_table_under_a_shadow_is_told_from_a_dark_body():
     assert shadow[100:140, 40:52].mean() > 0.9
     assert not shadow[100:140, 200:240].any()
     assert shadow[background].mean() < 0.05  # the lit table, but for its darkest specks
+
+
+def test_a_cut_that_runs_out_of_its_box_is_not_taken():
+    """A mark that spilled onto a plain white table (as a mark on a real clip's cup did):
+    the table's colour runs on past the box the cut works in, so the cut would take the
+    table as far as the box goes -- no body's rest, and the mark is left as it is."""
+    rgb = _table()
+    rgb[120:] = (235, 235, 235)  # a plain white table over the lower half
+    rgb[90:125, 150:175] = (200, 40, 40)  # a red cup at its edge
+    labels = np.zeros((240, 320), np.int32)
+    labels[110:170, 120:200] = 4  # the cup's foot and 50 rows of the table
+    assert complete_masks(labels, rgb) is labels
