@@ -29,8 +29,8 @@ from collections.abc import Collection
 import cv2
 import numpy as np
 
-from motionbits.boxes import at_border, grow_box, label_boxes
-from motionbits.masks import EDGELESS_GRADIENT, OUTLINE_BAND
+from motionbits.boxes import at_border, label_boxes
+from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
 from motionbits.revealed import SHADOW_CHROMA, SHADOW_GAIN
 
 __all__ = ["complete_masks", "COMPLETION_REACH", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE"]
@@ -124,14 +124,11 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
 
 def _open_outline(label_map: np.ndarray, label: int, box: tuple[slice, slice],
                   gradient: np.ndarray) -> bool:
-    """Whether at least ``OPEN_OUTLINE_SHARE`` of the outline of mask ``label`` (within
-    ``OUTLINE_BAND`` px) runs where the image shows no edge (gradient under
-    ``EDGELESS_GRADIENT``): the mask stops inside its body."""
-    grown = grow_box(box, OUTLINE_BAND + 1, label_map.shape)
-    mask = (label_map[grown] == label).view(np.uint8)
-    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * OUTLINE_BAND + 1,) * 2)
-    outline = (cv2.dilate(mask, disk) > 0) & (cv2.erode(mask, disk) == 0)
-    return np.mean(gradient[grown][outline] < EDGELESS_GRADIENT) >= OPEN_OUTLINE_SHARE
+    """Whether at least ``OPEN_OUTLINE_SHARE`` of the outline of mask ``label`` runs where
+    the image shows no edge (gradient under ``EDGELESS_GRADIENT``): the mask stops inside
+    its body."""
+    return bool(np.mean(outline_gradient(label_map, label, box, gradient)
+                        < EDGELESS_GRADIENT) >= OPEN_OUTLINE_SHARE)
 
 
 def _shadowed(rgb: np.ndarray, background: np.ndarray) -> np.ndarray:

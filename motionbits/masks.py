@@ -19,9 +19,9 @@ from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "drop_labels",
-           "hide_small",
-           "hide_edgeless", "snap_to_edges", "trim_flat_background", "SPECK_CELLS",
-           "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT", "HALO_MASK_SHARE"]
+           "hide_small", "hide_edgeless", "outline_gradient", "snap_to_edges",
+           "trim_flat_background", "SPECK_CELLS", "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT",
+           "HALO_MASK_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -353,18 +353,29 @@ def hide_edgeless(label_map: np.ndarray, gradient: np.ndarray) -> np.ndarray:
     Returns:
         (H, W) int32 label map (``label_map`` itself if nothing is hidden).
     """
-    r = OUTLINE_BAND + 1
-    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * OUTLINE_BAND + 1,) * 2)
-    edgeless = []
-    for i, box in enumerate(label_boxes(label_map)):
-        if box is None:
-            continue
-        grown = grow_box(box, r, label_map.shape)
-        mask = (label_map[grown] == i + 1).astype(np.uint8)
-        outline = (cv2.dilate(mask, disk) > 0) & (cv2.erode(mask, disk) == 0)
-        if np.quantile(gradient[grown][outline], OUTLINE_QUANTILE) < EDGELESS_GRADIENT:
-            edgeless.append(i + 1)
+    edgeless = [i + 1 for i, box in enumerate(label_boxes(label_map)) if box is not None
+                and np.quantile(outline_gradient(label_map, i + 1, box, gradient),
+                                OUTLINE_QUANTILE) < EDGELESS_GRADIENT]
     return drop_labels(label_map, edgeless)
+
+
+def outline_gradient(label_map: np.ndarray, label: int, box: tuple[slice, slice],
+                     gradient: np.ndarray) -> np.ndarray:
+    """(k,) float32 image gradient at the k pixels within ``OUTLINE_BAND`` px of the
+    outline of mask ``label`` (its bounding box ``box``), inside and out.
+
+    Args:
+        label_map: (H, W) int32 labels.
+        label: the mask's label.
+        box: (rows, cols) slices of its bounding box.
+        gradient: (H, W) float32 grey levels per px
+            (:func:`motionbits.evidence.gradient_magnitude`).
+    """
+    grown = grow_box(box, OUTLINE_BAND + 1, label_map.shape)
+    mask = (label_map[grown] == label).astype(np.uint8)
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * OUTLINE_BAND + 1,) * 2)
+    outline = (cv2.dilate(mask, disk) > 0) & (cv2.erode(mask, disk) == 0)
+    return gradient[grown][outline]
 
 
 def snap_to_edges(label_map: np.ndarray, rgb: np.ndarray, band: int) -> np.ndarray:
