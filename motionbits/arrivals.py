@@ -34,8 +34,9 @@ lies mostly where a MotionBit passed takes the id of the MotionBit that last cov
 there, if that one stands still beside it, and else becomes a new MotionBit, confirmed at
 the next frame if it still stands there (as SetDown's pieces): shown at once if it is
 solid and no moving MotionBit surrounds it, else from the next frame
-(:meth:`motionbits.setdown.SetDown.adopt`; README, "Bodies that arrived", round 21). Under a moving camera the
-memory follows the static world's model (homography and parallax) before each search.
+(:meth:`motionbits.setdown.SetDown.adopt`; README, "Bodies that arrived", round 21).
+Under a moving camera the memory follows the static world's model (homography and
+parallax) before each search.
 It is folded in with :class:`motionbits.revealed.StaticMemory`'s pixels seen still, so it
 is off when that memory is (config ``reveal_tolerance`` = 0).
 

@@ -7,9 +7,9 @@ whole (it reaches no image border: not an arm or hand that enters the frame), is
 OpenCV's GrabCut (colour models of the mask and of its surroundings, cut along the image's
 edges) within a box around it: the pixels the cut gives to the body, joined to the mask
 and not another mask's, are the body's too -- unless they run out to the box's frame
-(a mark spilled onto a plain table would take the table as far as the box goes). This is the last step on the shown masks
-(after specks and small marks are hidden: a speck grown by its colours would be shown);
-the segmenter's state keeps the motion's masks.
+(a mark spilled onto a plain table would take the table as far as the box goes). This
+is the last step on the shown masks (after specks and small marks are hidden: a speck
+grown by its colours would be shown); the segmenter's state keeps the motion's masks.
 
 The mark of a MotionBit moving now is completed only where at least
 ``OPEN_OUTLINE_SHARE`` of its outline runs where the image shows no edge: there the mask

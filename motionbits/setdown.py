@@ -92,8 +92,9 @@ class SetDown:
 
     Attributes:
         pending: new id -> its area (px) at birth, for pieces not yet confirmed.
-        held_back: the pending ids not shown until they are confirmed (all of this class's
-            own pieces; not the solid ones :meth:`adopt` takes).
+        held_back: the pending ids not shown until they are confirmed: all of
+            :meth:`split`'s pieces, and those of :meth:`adopt` that are not solid or lie
+            beside a moving MotionBit.
         parent: new id -> the id of the MotionBit it was left behind by.
     """
 
