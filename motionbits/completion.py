@@ -29,7 +29,7 @@ from collections.abc import Collection
 import cv2
 import numpy as np
 
-from motionbits.boxes import at_border, label_boxes
+from motionbits.boxes import at_border, grow_box, label_boxes
 from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
 from motionbits.revealed import SHADOW_CHROMA, SHADOW_GAIN
 
@@ -78,7 +78,6 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
     """
     if not label_map.any():
         return label_map
-    height, width = label_map.shape
     border = at_border(label_map)
     out = label_map
     for i, box in enumerate(label_boxes(label_map)):
@@ -90,8 +89,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             continue
         side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
         reach = int(COMPLETION_REACH * side) + COMPLETION_MARGIN
-        rows = slice(max(box[0].start - reach, 0), min(box[0].stop + reach, height))
-        cols = slice(max(box[1].start - reach, 0), min(box[1].stop + reach, width))
+        rows, cols = grow_box(box, reach, label_map.shape)
         labels = label_map[rows, cols]
         mask = labels == label
         trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
@@ -111,15 +109,20 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         new = joined[pieces] & free
         if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
             new &= ~_shadowed(rgb[rows, cols], free & ~new)
-        reach_edge = COMPLETION_FRAME + 1
-        if (new[:reach_edge].any() or new[-reach_edge:].any() or new[:, :reach_edge].any()
-                or new[:, -reach_edge:].any()):
-            continue  # the cut ran out of its box: not this body's rest
-        if new.any():
+        # a cut that runs out to its box's frame found no body's rest (a plain table)
+        if new.any() and not _reaches_frame(new):
             if out is label_map:
                 out = label_map.copy()
             out[rows, cols][new] = label
     return out
+
+
+def _reaches_frame(new: np.ndarray) -> bool:
+    """Whether the (h, w) bool pixels ``new`` come within one px of the box's frame (its
+    outermost ``COMPLETION_FRAME`` px, the background's for sure)."""
+    reach = COMPLETION_FRAME + 1
+    return bool(new[:reach].any() or new[-reach:].any() or new[:, :reach].any()
+                or new[:, -reach:].any())
 
 
 def _open_outline(label_map: np.ndarray, label: int, box: tuple[slice, slice],

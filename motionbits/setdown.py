@@ -193,9 +193,7 @@ class SetDown:
                 x, y, w, h = stats[k, :4]
                 piece = comp[y:y + h, x:x + w] == k
                 box = slice(y0 + y, y0 + y + h), slice(x0 + x, x0 + x + w)
-                opened = cv2.morphologyEx(piece.astype(np.uint8), cv2.MORPH_OPEN, kernel) > 0
-                if (opened.sum() < COMPACT_SHARE * piece.sum()
-                        or earned[box][piece].mean() < EARNED_SHARE):
+                if not _compact(piece, kernel) or earned[box][piece].mean() < EARNED_SHARE:
                     continue
                 still = photometric_residual(cur, prev, STILL, box)[piece].mean()
                 moved = photometric_residual(cur, prev, rigid_matrix(th, t), box)[piece].mean()
@@ -239,11 +237,9 @@ class SetDown:
             self.pending[i] = int(np.count_nonzero(piece))
             self.parent[i] = parent
             box = grow_box(nonzero_box(piece), side, labels.shape)
-            inside = piece[box].view(np.uint8)
-            ring = labels[box][(cv2.dilate(inside, square) > 0) & ~piece[box]]
-            solid = (np.count_nonzero(cv2.morphologyEx(inside, cv2.MORPH_OPEN, square))
-                     >= COMPACT_SHARE * self.pending[i])
-            if not solid or np.isin(ring, list(moving)).mean() >= BESIDE_MOVING_SHARE:
+            ring = labels[box][(cv2.dilate(piece[box].view(np.uint8), square) > 0) & ~piece[box]]
+            if (not _compact(piece[box], square)
+                    or np.isin(ring, list(moving)).mean() >= BESIDE_MOVING_SHARE):
                 self.held_back.add(i)
 
     def _came_with(self, lab: int, cur: np.ndarray, mask: np.ndarray,
@@ -271,6 +267,14 @@ class SetDown:
         near = np.unique(labels[around][grown])
         same = [int(i) for i in near if self.parent.get(int(i)) == parent]
         return min(same) if same else None
+
+
+def _compact(piece: np.ndarray, square: np.ndarray) -> bool:
+    """Whether an opening by ``square`` keeps ``COMPACT_SHARE`` of the (h, w) bool
+    ``piece`` (pixels outside the array count as the piece's, as OpenCV's erosion has
+    it)."""
+    opened = cv2.morphologyEx(piece.view(np.uint8), cv2.MORPH_OPEN, square)
+    return np.count_nonzero(opened) >= COMPACT_SHARE * np.count_nonzero(piece)
 
 
 def _mean_still(cur: np.ndarray, prev: np.ndarray, mask: np.ndarray) -> float:
