@@ -37,6 +37,10 @@ REFINE_ERODE = 5
 #: (its motion must stay inside it).
 REFINE_ITERATIONS = 10
 REFINE_MARGIN = 16
+#: ECC stops once an iteration raises the correlation by less than this (1e-5 ran all ten
+#: iterations on the built-in clip: 13.6 ms a frame; 1e-3: 9.4 ms, rotations within 3.4% of
+#: the truth, 3.75% before).
+REFINE_EPS = 1e-3
 
 
 @dataclass(frozen=True)
@@ -311,7 +315,7 @@ def _refine_in_box(cur_gray: np.ndarray, prev_gray: np.ndarray, labels: np.ndarr
     try:
         _, warp = cv2.findTransformECC(
             cur_gray[y0:y1, x0:x1], prev_gray[y0:y1, x0:x1], warp, cv2.MOTION_EUCLIDEAN,
-            (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, iterations, 1e-5),
+            (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, iterations, REFINE_EPS),
             mask.astype(np.uint8), 1)
     except cv2.error:
         return theta, np.asarray(t, np.float64)
