@@ -19,12 +19,18 @@ on 2 CPU cores, and completing every moving mark took the segmenter from 2.9x to
 its flow stage's time on the built-in clip, whose bodies' masks already end at their
 edges.
 
-Measured in README "Completing marks by colour" (rounds 20 and 21).
+Within a stream, a mark at rest takes the cut found for it at the last frame again while
+it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
+on the mark's exact outline, and a block at rest was completed at one frame and not at
+the next.
+
+Measured in README "Completing marks by colour" (rounds 20 to 22).
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -33,7 +39,8 @@ from motionbits.boxes import at_border, grow_box, label_boxes
 from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
 from motionbits.revealed import SHADOW_CHROMA, SHADOW_GAIN
 
-__all__ = ["complete_masks", "COMPLETION_REACH", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE"]
+__all__ = ["complete_masks", "CutMemory", "COMPLETION_REACH", "COMPLETION_SIDE",
+           "OPEN_OUTLINE_SHARE"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
@@ -55,10 +62,18 @@ COMPLETION_SHADOW_WINDOW = 31
 #: :data:`motionbits.masks.EDGELESS_GRADIENT` (on the built-in clip its moving masks show
 #: 0.01-0.19; on generated lids and blocks 0.25-0.8).
 OPEN_OUTLINE_SHARE = 0.25
+#: A mark at rest takes the cut found for it at the last frame again (:class:`CutMemory`)
+#: while it overlaps the mark that cut was found for by this IoU ...
+RECALL_IOU = 0.8
+#: ... and at most this share of the body's pixels changed by more than ``RECALL_LEVEL``
+#: grey levels (any channel) since.
+RECALL_CHANGED = 0.05
+RECALL_LEVEL = 12
 
 
 def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[int] = (),
-                   gradient: np.ndarray | None = None) -> np.ndarray:
+                   gradient: np.ndarray | None = None,
+                   memory: CutMemory | None = None) -> np.ndarray:
     """Grow each mask that reaches no image border over the rest of its body (GrabCut):
     every mask at rest, a moving one where its outline stops inside its body.
 
@@ -70,6 +85,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         gradient: (H, W) float32 image gradient
             (:func:`motionbits.evidence.gradient_magnitude`); None: moving masks are left
             as they are.
+        memory: the cuts found at earlier frames of a stream (:class:`CutMemory`), updated
+            in place; None: every mask is cut anew.
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
@@ -80,6 +97,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         return label_map
     border = at_border(label_map)
     out = label_map
+    found: dict[int, _Cut] = {}
     for i, box in enumerate(label_boxes(label_map)):
         label = i + 1
         if box is None or border[label]:
@@ -87,34 +105,106 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         if label in moving and (gradient is None or not _open_outline(label_map, label, box,
                                                                       gradient)):
             continue
-        side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
-        reach = int(COMPLETION_REACH * side) + COMPLETION_MARGIN
-        rows, cols = grow_box(box, reach, label_map.shape)
-        labels = label_map[rows, cols]
-        mask = labels == label
-        trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
-        f = COMPLETION_FRAME
-        trimap[f:-f, f:-f] = cv2.GC_PR_BGD
-        trimap[mask] = cv2.GC_PR_FGD
-        body = _grab_cut(rgb[rows, cols], trimap)
-        if body is None:
+        cut = None if memory is None or label in moving else memory.recall(label_map, label,
+                                                                             box, rgb)
+        if cut is None:
+            cut = _cut(label_map, label, box, rgb, out)
+        if cut is None:
             continue
-        # the pieces of the cut that hold mask pixels, where no mask is yet
-        free = out[rows, cols] == 0
-        n, pieces = cv2.connectedComponents((body & (free | mask)).view(np.uint8),
-                                            connectivity=8)
-        joined = np.zeros(n, bool)
-        joined[pieces[mask & body]] = True
-        joined[0] = False
-        new = joined[pieces] & free
-        if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
-            new &= ~_shadowed(rgb[rows, cols], free & ~new)
-        # a cut that runs out to its box's frame found no body's rest (a plain table)
-        if new.any() and not _reaches_frame(new):
-            if out is label_map:
-                out = label_map.copy()
-            out[rows, cols][new] = label
+        found[label] = cut
+        new = cut.body & (out[cut.rows, cut.cols] == 0)
+        if out is label_map:
+            out = label_map.copy()
+        out[cut.rows, cut.cols][new] = label
+    if memory is not None:
+        memory.keep({label: cut for label, cut in found.items() if label not in moving})
     return out
+
+
+@dataclass(frozen=True)
+class _Cut:
+    """The body GrabCut found for a mask: its pixels ``body`` (h, w) bool within the box
+    (``rows``, ``cols``), the mask's and those the cut added, from the mask (h, w) bool on
+    the (h, w, 3) uint8 image ``rgb`` of that box."""
+    rows: slice
+    cols: slice
+    mask: np.ndarray
+    rgb: np.ndarray
+    body: np.ndarray
+
+
+def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.ndarray,
+         out: np.ndarray) -> _Cut | None:
+    """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
+    around it, where no mask of ``out`` is yet; None where it finds none."""
+    side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
+    reach = int(COMPLETION_REACH * side) + COMPLETION_MARGIN
+    rows, cols = grow_box(box, reach, label_map.shape)
+    mask = label_map[rows, cols] == label
+    trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
+    f = COMPLETION_FRAME
+    trimap[f:-f, f:-f] = cv2.GC_PR_BGD
+    trimap[mask] = cv2.GC_PR_FGD
+    body = _grab_cut(rgb[rows, cols], trimap)
+    if body is None:
+        return None
+    # the pieces of the cut that hold mask pixels, where no mask is yet
+    free = out[rows, cols] == 0
+    n, pieces = cv2.connectedComponents((body & (free | mask)).view(np.uint8),
+                                        connectivity=8)
+    joined = np.zeros(n, bool)
+    joined[pieces[mask & body]] = True
+    joined[0] = False
+    new = joined[pieces] & free
+    if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
+        new &= ~_shadowed(rgb[rows, cols], free & ~new)
+    # a cut that runs out to its box's frame found no body's rest (a plain table)
+    if not new.any() or _reaches_frame(new):
+        return None
+    return _Cut(rows, cols, mask, rgb[rows, cols].copy(), mask | new)
+
+
+class CutMemory:
+    """The cuts found for the marks at rest at the last frame (one stream).
+
+    GrabCut's answer for a mark depends on the mark's exact outline and on its colour
+    models' random start: on a block at rest whose mark changed by a few pixels from frame
+    to frame, one frame's cut found the block's other face and the next found nothing. A
+    body that has not moved, under an image that has not changed, is where it was: the cut
+    found for its mark is used again while the mark overlaps the one it was found for by
+    ``RECALL_IOU`` and at most ``RECALL_CHANGED`` of the body's pixels changed by more
+    than ``RECALL_LEVEL`` grey levels (a hand passing in front, the camera moving) -- and
+    spares the cut's milliseconds.
+    """
+
+    def __init__(self) -> None:
+        self._cuts: dict[int, _Cut] = {}
+
+    def recall(self, label_map: np.ndarray, label: int, box: tuple[slice, slice],
+               rgb: np.ndarray) -> _Cut | None:
+        """The cut found for ``label`` at the last frame, if its mask (box ``box`` in the
+        (H, W) ``label_map``) and the (H, W, 3) uint8 image ``rgb`` still fit it."""
+        cut = self._cuts.get(label)
+        if cut is None or not _inside(box, (cut.rows, cut.cols)):
+            return None
+        mask = label_map[cut.rows, cut.cols] == label
+        union = np.count_nonzero(mask | cut.mask)
+        if np.count_nonzero(mask & cut.mask) < RECALL_IOU * union:
+            return None
+        change = cv2.absdiff(rgb[cut.rows, cut.cols], cut.rgb).max(axis=2)[cut.body]
+        if np.count_nonzero(change > RECALL_LEVEL) > RECALL_CHANGED * change.size:
+            return None
+        return cut
+
+    def keep(self, cuts: dict[int, _Cut]) -> None:
+        """Remember these cuts (label -> cut) instead of the last frame's."""
+        self._cuts = cuts
+
+
+def _inside(box: tuple[slice, slice], outer: tuple[slice, slice]) -> bool:
+    """Whether the (rows, cols) ``box`` lies within ``outer``."""
+    return (box[0].start >= outer[0].start and box[0].stop <= outer[0].stop
+            and box[1].start >= outer[1].start and box[1].stop <= outer[1].stop)
 
 
 def _reaches_frame(new: np.ndarray) -> bool:

@@ -20,7 +20,7 @@ from motionbits.backend import make_ops
 from motionbits.boxes import label_areas, nonzero_box, run_counts
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
-from motionbits.completion import complete_masks
+from motionbits.completion import CutMemory, complete_masks
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
     appearance_consistent, forgive_misalignment, gradient_magnitude, motion_gain, pull_back,
@@ -172,6 +172,7 @@ class MotionBitsSegmenter:
         # pieces a MotionBit left behind (a body set down), new MotionBits
         self._setdown = SetDown(self.config.pixel_evidence, self.config.carry_tolerance)
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
+        self._cuts = CutMemory()  # the marks at rest completed at the last frame
         if self._work_size is None:  # sized at the stream's first frame (_start)
             self._labels = self._earned = self._still = self._joined = None
             self._temporal = self._memory = self._arrivals = None
@@ -501,7 +502,8 @@ class MotionBitsSegmenter:
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             # and each mark seen whole takes the rest of its body by colour (a moving one
             # only where its outline stops inside its body)
-            shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient)
+            shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient,
+                                   self._cuts)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

@@ -107,3 +107,37 @@ def test_a_cut_that_runs_out_of_its_box_is_not_taken():
     labels = np.zeros((240, 320), np.int32)
     labels[110:170, 120:200] = 4  # the cup's foot and 50 rows of the table
     assert complete_masks(labels, rgb) is labels
+
+
+def test_a_cut_found_for_a_mark_at_rest_is_used_again_until_the_image_changes(monkeypatch):
+    """A body at rest under an unchanged image is where its cut found it: the next frame's
+    mark (a few pixels different) takes the same pixels without a new cut; a hand passing
+    over the body, or the body moving, asks for a new cut."""
+    import motionbits.completion as completion
+
+    rgb, body, labels = _scene()
+    memory = completion.CutMemory()
+    first = complete_masks(labels, rgb, memory=memory)
+    assert (first[body] == 3).mean() > 0.97
+
+    calls = []
+    grab_cut = completion._grab_cut
+    monkeypatch.setattr(completion, "_grab_cut",
+                        lambda *a: calls.append(1) or grab_cut(*a))
+    shrunk = labels.copy()
+    shrunk[116:119] = 0  # the mark three rows shorter
+    noisy = np.clip(rgb.astype(int) + np.random.default_rng(1).integers(-4, 5, rgb.shape),
+                    0, 255).astype(np.uint8)  # and sensor noise
+    assert np.array_equal(complete_masks(shrunk, noisy, memory=memory), first)
+    assert calls == []
+
+    covered = noisy.copy()
+    covered[80:110, 120:180] = (230, 200, 170)  # a hand over the block's top half
+    complete_masks(shrunk, covered, memory=memory)
+    assert len(calls) == 1
+    complete_masks(shrunk, covered, memory=memory)  # the hand is still there: recalled
+    assert len(calls) == 1
+    complete_masks(shrunk, covered, moving={3}, memory=memory)  # moving: not recalled, and
+    assert len(calls) == 1  # (its outline follows image edges) not cut either ...
+    complete_masks(shrunk, covered, memory=memory)  # ... nor remembered: at rest, cut anew
+    assert len(calls) == 2
