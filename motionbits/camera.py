@@ -40,9 +40,6 @@ __all__ = ["dominant_homography", "compensate_flow", "world_maps", "stabilize_pr
 #: A node's flow is trusted for the camera fit above this forward-backward reliability
 #: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
 RELIABLE = 0.5
-#: At most this many nodes (evenly strided) vote in the homography's RANSAC; the inliers
-#: are then counted among all of them (the fit's cost grows faster than the nodes).
-HOMOGRAPHY_POINTS = 4000
 
 
 def dominant_homography(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray,
@@ -62,13 +59,11 @@ def dominant_homography(points: np.ndarray, back_points: np.ndarray, reliable: n
     q = back_points[reliable].astype(np.float32)
     if len(p) < 8:
         return None
-    step = -(-len(p) // HOMOGRAPHY_POINTS)  # every step-th node votes
-    h, inl = cv2.findHomography(p[::step], q[::step], cv2.RANSAC, threshold, maxIters=500)
+    h, inl = cv2.findHomography(p, q, cv2.RANSAC, threshold, maxIters=500)
     if h is None or inl is None:
         return None
     inliers = np.zeros(len(points), bool)
-    inliers[reliable] = np.linalg.norm(cv2.perspectiveTransform(p[None], h)[0] - q,
-                                       axis=1) <= threshold
+    inliers[reliable] = inl.ravel() > 0
     return h, inliers
 
 
