@@ -141,3 +141,36 @@ def test_a_cut_found_for_a_mark_at_rest_is_used_again_until_the_image_changes(mo
     assert len(calls) == 1  # (its outline follows image edges) not cut either ...
     complete_masks(shrunk, covered, memory=memory)  # ... nor remembered: at rest, cut anew
     assert len(calls) == 2
+
+
+def test_a_body_at_rest_whose_mark_wore_down_is_shown_as_its_cut_found_it():
+    """The mask the segmenter holds for a body at rest can wear down to a sliver the shown
+    map hides as too small (a hand's shadow passing beside it, pixels lost to the
+    background): while that sliver lies where the body was found and the image there has
+    not changed, the body is shown as its cut found it; not once it moves, and not where
+    the sliver lies elsewhere."""
+    import motionbits.completion as completion
+
+    rgb, body, labels = _scene()
+    sliver = np.zeros_like(labels)
+    sliver[130:136, 130:140] = 3  # what the segmenter still holds, inside the block
+    hidden = np.zeros_like(labels)  # ... which the shown map hid
+    memory = completion.CutMemory()
+    complete_masks(labels, rgb, memory=memory, state=labels)
+    out = complete_masks(hidden, rgb, memory=memory, state=sliver)
+    assert (out[body] == 3).mean() > 0.97 and (out[~body] == 0).all()
+    again = complete_masks(hidden, rgb, memory=memory, state=sliver)  # and at the next frame
+    assert np.array_equal(again, out)
+    assert complete_masks(hidden, rgb, {3}, memory=memory, state=sliver) is hidden  # moving
+
+    memory = completion.CutMemory()
+    complete_masks(labels, rgb, memory=memory, state=labels)
+    elsewhere = np.zeros_like(labels)
+    elsewhere[200:206, 20:30] = 3  # the label now lies elsewhere: not this body
+    assert complete_masks(hidden, rgb, memory=memory, state=elsewhere) is hidden
+
+    memory = completion.CutMemory()
+    complete_masks(labels, rgb, memory=memory, state=labels)
+    covered = rgb.copy()
+    covered[80:110, 120:180] = (230, 200, 170)  # a hand over the block
+    assert complete_masks(hidden, covered, memory=memory, state=sliver) is hidden
