@@ -126,7 +126,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             out = label_map.copy()
         out[cut.rows, cut.cols][new] = label
     if memory is not None and state is not None:
-        for label, cut in memory.recall_hidden(state, label_map, rgb, moving).items():
+        for label, cut in memory.recall_hidden(state, out, rgb, moving).items():
             found[label] = cut
             new = cut.body & (out[cut.rows, cut.cols] == 0)
             if out is label_map:
@@ -220,7 +220,8 @@ class CutMemory:
         though ``state`` (H, W), the segmenter's labels, still holds them at rest, all
         within the box of the cut and ``RECALL_INSIDE`` of them where the segmenter held
         the label then or where the cut found its body, under an (H, W, 3) uint8 image
-        ``rgb`` unchanged there: a body at rest whose motion's mask wore down to a sliver
+        ``rgb`` unchanged there, and ``RECALL_INSIDE`` of that body not under another
+        mark of ``label_map``: a body at rest whose motion's mask wore down to a sliver
         (hidden as too small) is still the body its cut found."""
         back = {}
         for label, cut in self._cuts.items():
@@ -231,6 +232,9 @@ class CutMemory:
             if (inside == 0 or inside < np.count_nonzero(state == label)
                     or np.count_nonzero(own & (cut.body | cut.state)) < RECALL_INSIDE * inside):
                 continue
+            free = label_map[cut.rows, cut.cols] == 0
+            if np.count_nonzero(cut.body & free) < RECALL_INSIDE * np.count_nonzero(cut.body):
+                continue  # other marks took the body's place
             if _unchanged(cut, rgb):
                 back[label] = cut
         return back

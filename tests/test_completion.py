@@ -147,8 +147,8 @@ def test_a_body_at_rest_whose_mark_wore_down_is_shown_as_its_cut_found_it():
     """The mask the segmenter holds for a body at rest can wear down to a sliver the shown
     map hides as too small (a hand's shadow passing beside it, pixels lost to the
     background): while that sliver lies where the body was found and the image there has
-    not changed, the body is shown as its cut found it; not once it moves, and not where
-    the sliver lies elsewhere."""
+    not changed, the body is shown as its cut found it; not once it moves, not where the
+    sliver lies elsewhere, not where another mark took the body's place."""
     import motionbits.completion as completion
 
     rgb, body, labels = _scene()
@@ -168,6 +168,12 @@ def test_a_body_at_rest_whose_mark_wore_down_is_shown_as_its_cut_found_it():
     elsewhere = np.zeros_like(labels)
     elsewhere[200:206, 20:30] = 3  # the label now lies elsewhere: not this body
     assert complete_masks(hidden, rgb, memory=memory, state=elsewhere) is hidden
+
+    memory = completion.CutMemory()
+    complete_masks(labels, rgb, memory=memory, state=labels)
+    taken = hidden.copy()
+    taken[80:125, 120:180] = 7  # another mark now covers most of the block
+    assert not (complete_masks(taken, rgb, memory=memory, state=sliver + taken) == 3).any()
 
     memory = completion.CutMemory()
     complete_masks(labels, rgb, memory=memory, state=labels)
