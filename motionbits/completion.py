@@ -22,8 +22,7 @@ edges.
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
 on the mark's exact outline, and a block at rest was completed at one frame and not at
-the next. A body at rest whose mask wore down to a sliver the shown map hides (too small)
-is shown as its cut found it, while the image there has not changed.
+the next.
 
 Measured in README "Completing marks by colour" (rounds 20 to 22).
 """
@@ -70,15 +69,11 @@ RECALL_IOU = 0.8
 #: grey levels (any channel) since.
 RECALL_CHANGED = 0.05
 RECALL_LEVEL = 12
-#: A label the shown map hid is shown as the body its cut found at the last frame while
-#: this share of its pixels lies inside that body (:meth:`CutMemory.recall_hidden`).
-RECALL_INSIDE = 0.8
 
 
 def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[int] = (),
                    gradient: np.ndarray | None = None,
-                   memory: CutMemory | None = None,
-                   state: np.ndarray | None = None) -> np.ndarray:
+                   memory: CutMemory | None = None) -> np.ndarray:
     """Grow each mask that reaches no image border over the rest of its body (GrabCut):
     every mask at rest, a moving one where its outline stops inside its body.
 
@@ -92,17 +87,13 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             as they are.
         memory: the cuts found at earlier frames of a stream (:class:`CutMemory`), updated
             in place; None: every mask is cut anew.
-        state: (H, W) int32 labels the segmenter holds now, before any was hidden from
-            ``label_map`` (too small, edgeless): a label hidden there, at rest, whose
-            state lies within the body its cut found at the last frame, under an image
-            that has not changed, is that body still (:meth:`CutMemory.recall_hidden`).
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
         colours take within its box, where they stay off the box's frame
         (``label_map`` itself if none takes any).
     """
-    if not label_map.any() and memory is None:
+    if not label_map.any():
         return label_map
     border = at_border(label_map)
     out = label_map
@@ -117,7 +108,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         cut = None if memory is None or label in moving else memory.recall(label_map, label,
                                                                              box, rgb)
         if cut is None:
-            cut = _cut(label_map, label, box, rgb, out, state)
+            cut = _cut(label_map, label, box, rgb, out)
         if cut is None:
             continue
         found[label] = cut
@@ -125,13 +116,6 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         if out is label_map:
             out = label_map.copy()
         out[cut.rows, cut.cols][new] = label
-    if memory is not None and state is not None:
-        for label, cut in memory.recall_hidden(state, out, rgb, moving).items():
-            found[label] = cut
-            new = cut.body & (out[cut.rows, cut.cols] == 0)
-            if out is label_map:
-                out = label_map.copy()
-            out[cut.rows, cut.cols][new] = label
     if memory is not None:
         memory.keep({label: cut for label, cut in found.items() if label not in moving})
     return out
@@ -141,21 +125,18 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
 class _Cut:
     """The body GrabCut found for a mask: its pixels ``body`` (h, w) bool within the box
     (``rows``, ``cols``), the mask's and those the cut added, from the mask (h, w) bool on
-    the (h, w, 3) uint8 image ``rgb`` of that box; ``state`` (h, w) bool: the segmenter's
-    own mask of the label then."""
+    the (h, w, 3) uint8 image ``rgb`` of that box."""
     rows: slice
     cols: slice
     mask: np.ndarray
     rgb: np.ndarray
     body: np.ndarray
-    state: np.ndarray
 
 
 def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.ndarray,
-         out: np.ndarray, state: np.ndarray | None) -> _Cut | None:
+         out: np.ndarray) -> _Cut | None:
     """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
-    around it, where no mask of ``out`` is yet; None where it finds none. ``state``: the
-    segmenter's labels (None: ``label_map``'s)."""
+    around it, where no mask of ``out`` is yet; None where it finds none."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
     reach = int(COMPLETION_REACH * side) + COMPLETION_MARGIN
     rows, cols = grow_box(box, reach, label_map.shape)
@@ -180,8 +161,7 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
     # a cut that runs out to its box's frame found no body's rest (a plain table)
     if not new.any() or _reaches_frame(new):
         return None
-    own = mask if state is None else state[rows, cols] == label
-    return _Cut(rows, cols, mask, rgb[rows, cols].copy(), mask | new, own)
+    return _Cut(rows, cols, mask, rgb[rows, cols].copy(), mask | new)
 
 
 class CutMemory:
@@ -194,8 +174,7 @@ class CutMemory:
     found for its mark is used again while the mark overlaps the one it was found for by
     ``RECALL_IOU`` and at most ``RECALL_CHANGED`` of the body's pixels changed by more
     than ``RECALL_LEVEL`` grey levels (a hand passing in front, the camera moving) -- and
-    spares the cut's milliseconds. The same holds once the mark is hidden, while the
-    segmenter still holds the body (:meth:`recall_hidden`).
+    spares the cut's milliseconds.
     """
 
     def __init__(self) -> None:
@@ -212,43 +191,14 @@ class CutMemory:
         union = np.count_nonzero(mask | cut.mask)
         if np.count_nonzero(mask & cut.mask) < RECALL_IOU * union:
             return None
-        return cut if _unchanged(cut, rgb) else None
-
-    def recall_hidden(self, state: np.ndarray, label_map: np.ndarray, rgb: np.ndarray,
-                      moving: Collection[int]) -> dict[int, _Cut]:
-        """The cuts of the last frame whose labels ``label_map`` (H, W) no longer shows
-        though ``state`` (H, W), the segmenter's labels, still holds them at rest, all
-        within the box of the cut and ``RECALL_INSIDE`` of them where the segmenter held
-        the label then or where the cut found its body, under an (H, W, 3) uint8 image
-        ``rgb`` unchanged there, and ``RECALL_INSIDE`` of that body not under another
-        mark of ``label_map``: a body at rest whose motion's mask wore down to a sliver
-        (hidden as too small) is still the body its cut found."""
-        back = {}
-        for label, cut in self._cuts.items():
-            if label in moving or np.any(label_map[cut.rows, cut.cols] == label):
-                continue
-            own = state[cut.rows, cut.cols] == label
-            inside = np.count_nonzero(own)
-            if (inside == 0 or inside < np.count_nonzero(state == label)
-                    or np.count_nonzero(own & (cut.body | cut.state)) < RECALL_INSIDE * inside):
-                continue
-            free = label_map[cut.rows, cut.cols] == 0
-            if np.count_nonzero(cut.body & free) < RECALL_INSIDE * np.count_nonzero(cut.body):
-                continue  # other marks took the body's place
-            if _unchanged(cut, rgb):
-                back[label] = cut
-        return back
+        change = cv2.absdiff(rgb[cut.rows, cut.cols], cut.rgb).max(axis=2)[cut.body]
+        if np.count_nonzero(change > RECALL_LEVEL) > RECALL_CHANGED * change.size:
+            return None
+        return cut
 
     def keep(self, cuts: dict[int, _Cut]) -> None:
         """Remember these cuts (label -> cut) instead of the last frame's."""
         self._cuts = cuts
-
-
-def _unchanged(cut: _Cut, rgb: np.ndarray) -> bool:
-    """Whether at most ``RECALL_CHANGED`` of the body's pixels of ``cut`` changed by more
-    than ``RECALL_LEVEL`` grey levels in the (H, W, 3) uint8 image ``rgb``."""
-    change = cv2.absdiff(rgb[cut.rows, cut.cols], cut.rgb).max(axis=2)[cut.body]
-    return np.count_nonzero(change > RECALL_LEVEL) <= RECALL_CHANGED * change.size
 
 
 def _inside(box: tuple[slice, slice], outer: tuple[slice, slice]) -> bool:

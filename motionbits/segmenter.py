@@ -490,8 +490,8 @@ class MotionBitsSegmenter:
                 half_gradient=half_gradient)
             self._joined = (np.zeros(labels.shape, np.int32) if with_links is labels  # none
                             else carried_joins(with_links, labels, group_of))
-            grouped = group_map(with_links, rep)
-            shown = snap_to_edges(grouped, cur, int(round(cfg.edge_band * max(grid.cell))))
+            shown = snap_to_edges(group_map(with_links, rep), cur,
+                                  int(round(cfg.edge_band * max(grid.cell))))
             # a mask is shown if its outline is an image edge (a mask left on a flat table
             # looks like the table around it) and, once its overhangs onto flat background
             # are trimmed, it still covers MIN_SHOWN_CELLS grid cells (smaller ones are
@@ -501,10 +501,9 @@ class MotionBitsSegmenter:
             shown = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             # and each mark seen whole takes the rest of its body by colour (a moving one
-            # only where its outline stops inside its body; a body at rest under an
-            # unchanged image keeps the cut found for it, even once its mask wore down)
+            # only where its outline stops inside its body)
             shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient,
-                                   self._cuts, grouped)
+                                   self._cuts)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
