@@ -94,6 +94,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         (``label_map`` itself if none takes any).
     """
     if not label_map.any():
+        if memory is not None:
+            memory.keep({})
         return label_map
     border = at_border(label_map)
     out = label_map

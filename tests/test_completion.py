@@ -141,3 +141,6 @@ def test_a_cut_found_for_a_mark_at_rest_is_used_again_until_the_image_changes(mo
     assert len(calls) == 1  # (its outline follows image edges) not cut either ...
     complete_masks(shrunk, covered, memory=memory)  # ... nor remembered: at rest, cut anew
     assert len(calls) == 2
+    complete_masks(np.zeros_like(labels), covered, memory=memory)  # a frame without marks
+    complete_masks(shrunk, covered, memory=memory)  # forgets them
+    assert len(calls) == 3
