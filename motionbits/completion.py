@@ -99,7 +99,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         return label_map
     border = at_border(label_map)
     out = label_map
-    found: dict[int, _Cut] = {}
+    found: dict[int, _Cut] = {}  # the cuts of the marks at rest, for the memory
     for i, box in enumerate(label_boxes(label_map)):
         label = i + 1
         if box is None or border[label]:
@@ -113,13 +113,14 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             cut = _cut(label_map, label, box, rgb, out)
         if cut is None:
             continue
-        found[label] = cut
+        if label not in moving:
+            found[label] = cut
         new = cut.body & (out[cut.rows, cut.cols] == 0)
         if out is label_map:
             out = label_map.copy()
         out[cut.rows, cut.cols][new] = label
     if memory is not None:
-        memory.keep({label: cut for label, cut in found.items() if label not in moving})
+        memory.keep(found)
     return out
 
 

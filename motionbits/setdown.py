@@ -238,8 +238,8 @@ class SetDown:
             self.parent[i] = parent
             box = grow_box(nonzero_box(piece), side, labels.shape)
             ring = labels[box][(cv2.dilate(piece[box].view(np.uint8), square) > 0) & ~piece[box]]
-            if (not _compact(piece[box], square)
-                    or np.isin(ring, list(moving)).mean() >= BESIDE_MOVING_SHARE):
+            if (not _compact(piece[box], square) or (
+                    ring.size and np.isin(ring, list(moving)).mean() >= BESIDE_MOVING_SHARE)):
                 self.held_back.add(i)
 
     def _came_with(self, lab: int, cur: np.ndarray, mask: np.ndarray,
