@@ -13,7 +13,7 @@ from PIL import Image
 from motionbits.frames import as_rgb_array
 
 __all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "read_image",
-           "IMAGE_SUFFIXES"]
+           "is_frame_file", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
@@ -52,8 +52,16 @@ def _iter_video_file(path: Path) -> Iterator[np.ndarray]:
         cap.release()
 
 
+def is_frame_file(path: Path) -> bool:
+    """Whether an entry of a folder of frames is read as a frame: a regular file with an
+    image suffix whose name does not start with '.' (hidden files such as the
+    ``._00001.png`` AppleDouble files macOS leaves on shared drives are not images)."""
+    return (path.suffix.lower() in IMAGE_SUFFIXES and not path.name.startswith(".")
+            and path.is_file())
+
+
 def _image_files(folder: Path) -> list[Path]:
-    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    files = sorted(p for p in folder.iterdir() if is_frame_file(p))
     if not files:
         raise ValueError(f"folder {folder} contains no images ({', '.join(IMAGE_SUFFIXES)})")
     return files
@@ -105,7 +113,7 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
 
     Args:
         source: path to a video file (anything OpenCV/FFmpeg decodes) or to a folder of
-            images (sorted by name); a (T, H, W, 3) / (T, H, W) uint8 array; or an iterable
+            images (sorted by name; hidden files, named ``.*``, are skipped); a (T, H, W, 3) / (T, H, W) uint8 array; or an iterable
             of (H, W, 3) frames.
 
     Raises:
@@ -163,7 +171,7 @@ def count_frames(source: FrameSource) -> int | None:
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
         if path.is_dir():
-            return sum(1 for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+            return sum(1 for p in path.iterdir() if is_frame_file(p))
         if path.is_file() and path.suffix.lower() not in IMAGE_SUFFIXES:
             cap = cv2.VideoCapture(str(path))
             n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0

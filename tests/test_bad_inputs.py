@@ -136,6 +136,11 @@ def build_assets(root: Path) -> Path:
     _write_frames(root / "thin", [np.full((8, 4000, 3), 90 + 20 * i, np.uint8) for i in range(2)])
     _write_frames(root / "tiny", [np.zeros((8, 8, 3), np.uint8)] * 2)
     _write_frames(root / "one", frames[:1])
+    # frames copied from a Mac: AppleDouble "._*.png" files and a folder named like an image
+    hidden = _write_frames(root / "hidden", frames[:3])
+    (hidden / "._00001.png").write_bytes(b"\x00\x05\x16\x07\x00\x02\x00\x00Mac OS X")
+    (hidden / ".thumb.png").write_bytes(b"")
+    (hidden / "zz.png").mkdir()
     _write_frames(root / "ünï cødé", frames[:3])
     # a MoRiBo dataset: track/scene/{frames/, gt.png}
     scene = root / "data" / "robot" / "scene_0000"
@@ -494,6 +499,8 @@ CASES: list[Case] = [
     Case("segment/rgba-pngs", cli(S, "{a}/rgba", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(6)),
     Case("segment/palette-pngs", cli(S, "{a}/palette", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(6)),
     Case("segment/grey-pngs", cli(S, "{a}/grey8", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(4)),
+    Case("segment/hidden-files-skipped", cli(S, "{a}/hidden", "--out", "{t}/out", *SEG), CORRECT,
+         check=seg_ok(3)),  # was: "could not read image ._00001.png"
     Case("segment/one-frame", cli(S, "{a}/one", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/single-image-file", cli(S, "{a}/frames/00000.png", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/unicode-paths", cli(S, "{a}/ünï cødé", "--out", "{t}/ôut put", *SEG), CORRECT, check=seg_ok(3, "ôut put")),

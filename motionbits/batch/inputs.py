@@ -8,7 +8,7 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
-from motionbits.video import IMAGE_SUFFIXES
+from motionbits.video import is_frame_file
 
 __all__ = ["BatchInput", "expand_inputs", "LIST_SUFFIXES", "VIDEO_SUFFIXES"]
 
@@ -33,7 +33,7 @@ class BatchInput:
 
 
 def _holds_images(folder: Path) -> bool:
-    return any(p.suffix.lower() in IMAGE_SUFFIXES for p in folder.iterdir() if p.is_file())
+    return any(is_frame_file(p) for p in folder.iterdir())
 
 
 def _from_folder(folder: Path) -> list[Path]:

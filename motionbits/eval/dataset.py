@@ -34,7 +34,6 @@ __all__ = [
     "find_prediction", "read_prediction", "evaluate_dataset", "average_blocks", "summarize_tracks",
 ]
 
-_IMG = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
 
 @dataclass(frozen=True)
@@ -103,12 +102,15 @@ def _find_scenes(root: Path) -> list[Scene]:
 
 
 def scene_frames(scene: Scene | Path) -> list[Path]:
-    """The scene's frame files in order (``frames/*`` sorted by name)."""
+    """The scene's frame files in order (``frames/*`` sorted by name; hidden ``.*`` files
+    and folders are skipped)."""
+    from motionbits.video import is_frame_file
+
     path = scene.path if isinstance(scene, Scene) else Path(scene)
     folder = path / "frames"
     if not folder.is_dir():
         raise FileNotFoundError(f"scene {path} has no frames/ folder")
-    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in _IMG)
+    files = sorted(p for p in folder.iterdir() if is_frame_file(p))
     if not files:
         raise ValueError(f"{folder} holds no frame images")
     return files

@@ -78,7 +78,8 @@ def scenes_from_sequence(
     if not src.is_dir():
         raise FileNotFoundError(f"sequence folder not found: {src}")
     frame_dir, gt_dir = _folders(src)
-    frames = sorted(p for p in frame_dir.iterdir() if p.suffix.lower() in _IMG)
+    frames = sorted(p for p in frame_dir.iterdir() if p.suffix.lower() in _IMG
+                    and not p.name.startswith(".") and p.is_file())
     if len(frames) < length:
         raise ValueError(f"{frame_dir} holds {len(frames)} frames, fewer than --length {length}")
     name = name or src.resolve().name
