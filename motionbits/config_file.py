@@ -63,16 +63,21 @@ def load_config(path: "str | os.PathLike", **overrides: Any) -> MotionBitsConfig
         (2500, 1.2, 320, 5)
     """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(f"config file {path} does not exist")
-    text = path.read_text(encoding="utf-8")
+    if path.is_dir():
+        raise IsADirectoryError(f"config file {path} is a folder; pass a .toml or .json file "
+                                "(or an earlier run's summary.json)")
+    suffix = path.suffix.lower()
+    if suffix not in (".toml", ".json"):
+        raise ValueError(f"config file {path} must end in .toml or .json")
     try:
-        if path.suffix.lower() == ".toml":
-            data = tomllib.loads(text)
-        elif path.suffix.lower() == ".json":
-            data = json.loads(text)
-        else:
-            raise ValueError(f"config file {path} must end in .toml or .json")
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"config file {path} is not a text file (not UTF-8); "
+                         f"it must hold {suffix[1:].upper()}") from None
+    try:
+        data = tomllib.loads(text) if suffix == ".toml" else json.loads(text)
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"config file {path} is not valid {path.suffix[1:].upper()}: {exc}") from None
     if not isinstance(data, dict):

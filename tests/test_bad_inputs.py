@@ -529,6 +529,13 @@ CASES: list[Case] = [
     Case("segment/backend-unknown", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "cuda"), CLEAR, "backend", absent=("out",)),
     Case("segment/backend-torch-without-torch", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "torch",
                                                     patches=(no_torch_ops,)), CLEAR, "torch", absent=("out",)),
+    Case("segment/config-is-a-folder", cli(S, "{a}/one", "--out", "{t}/out", "--config", "{a}/frames"), CLEAR,
+         "is a folder", absent=("out",)),  # was: "config file ... does not exist"
+    Case("segment/config-binary-json", prepared(lambda t: (t / "c.json").write_bytes(b"\x00\xdb\xff" * 20), cli(
+        S, "{a}/one", "--out", "{t}/out", "--config", "{t}/c.json")), CLEAR, "c.json is not a text file",
+        absent=("out",)),  # was: "'utf-8' codec can't decode byte 0xdb ..." (no file named)
+    Case("segment/config-video", cli(S, "{a}/one", "--out", "{t}/out", "--config", "{a}/clip.mp4"), CLEAR,
+         "must end in .toml or .json", absent=("out",)),  # was: the UTF-8 error, before the suffix check
     Case("segment/unknown-option", cli(S, "{a}/frames", "--out", "{t}/out", "--nodez", "3"), CLEAR, "unrecognized", absent=("out",)),
     # ---- segment: outputs
     Case("segment/out-is-a-file", prepared(a_file("out"), cli(S, "{a}/frames", "--out", "{t}/out")), CLEAR, "is a file"),
