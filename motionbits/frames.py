@@ -18,9 +18,10 @@ def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
 
     Accepted: (H, W, 3) uint8 RGB; (H, W) or (H, W, 1) uint8 greyscale (replicated to
     three channels); (H, W, 4) uint8 RGBA (alpha dropped); a PIL image of any mode
-    (converted to RGB). 16-bit input (uint16 arrays, PIL modes "I;16" and "I" with values
-    in 0..65535) is scaled to 8 bits by 255 / 65535, not clipped. Float images are refused
-    rather than guessed at ([0, 1] or [0, 255]?): the error says how to convert them.
+    (converted to RGB). 16-bit input (uint16 arrays of either byte order, PIL modes
+    "I;16", "I;16B" and "I" with values in 0..65535) is scaled to 8 bits by 255 / 65535,
+    not clipped. Float images (arrays, PIL mode "F") are refused rather than guessed at
+    ([0, 1] or [0, 255]?): the error says how to convert them.
 
     Args:
         frame: the frame.
@@ -35,13 +36,16 @@ def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
         (2, 3, 3)
     """
     if hasattr(frame, "convert") and hasattr(frame, "size") and not isinstance(frame, np.ndarray):
-        # a PIL image, without importing PIL here; 16-bit modes keep their values
-        frame = np.asarray(frame if frame.mode.startswith("I") else frame.convert("RGB"))
+        # a PIL image, without importing PIL here; 16-bit modes keep their values, and
+        # float ones ("F") are refused below like float arrays (convert("RGB") would clip
+        # values in [0, 1] to a black frame)
+        frame = np.asarray(frame if frame.mode.startswith(("I", "F")) else frame.convert("RGB"))
         if frame.dtype.kind == "i":  # mode "I" (int32)
             if frame.size and (frame.min() < 0 or frame.max() > 65535):
                 raise ValueError(f"{name} is a 32-bit integer image with values outside 0..65535")
             frame = frame.astype(np.uint16)
-    if isinstance(frame, np.ndarray) and frame.dtype == np.uint16:
+    if isinstance(frame, np.ndarray) and frame.dtype.kind == "u" and frame.dtype.itemsize == 2:
+        # uint16 in either byte order (PIL's "I;16B", big-endian FITS / TIFF data)
         frame = ((frame.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
     if not isinstance(frame, np.ndarray):
         raise TypeError(

@@ -753,6 +753,13 @@ CASES: list[Case] = [
     Case("vlm/frame-0x0", api(lambda t: _adapter_frame(np.zeros((0, 0, 3), np.uint8))), CLEAR, "empty"),
     Case("vlm/frame-pil-16bit", api(lambda t: _adapter_frame(Image.fromarray(_GRAD16))), CORRECT,
          check=lambda o, t: o.value.shape == (64, 64, 3) and o.value.max() == round(_GRAD16.max() / 257)),
+    Case("vlm/frame-pil-float-refused", api(lambda t: _adapter_frame(Image.fromarray(np.full((8, 8), 0.5, np.float32)))),
+         CLEAR, "np.clip"),  # was: a black frame (PIL's convert("RGB") clips [0, 1] to 0)
+    Case("vlm/frame-uint16-big-endian", api(lambda t: _adapter_frame(np.dstack([_GRAD16] * 3).astype(">u2"))), CORRECT,
+         check=lambda o, t: abs(float(o.value.mean()) - float(_GRAD16.mean()) / 257) < 1),  # was: "got dtype >u2"
+    Case("vlm/frame-pil-16bit-big-endian", api(lambda t: _adapter_frame(
+        Image.frombytes("I;16B", (64, 64), _GRAD16.astype(">u2").tobytes()))), CORRECT,
+         check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
     Case("vlm/frame-complex", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.complex64))), CLEAR, "uint8"),
     Case("vlm/frame-int32", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.int32))), CLEAR, "uint8"),
     Case("vlm/frames-empty", api(lambda t: _stub_generate([])), CLEAR, "empty"),
