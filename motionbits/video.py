@@ -118,13 +118,17 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
 
     Raises:
         FileNotFoundError: the path does not exist.
-        ValueError: the video or folder holds no readable frame, or a frame is malformed.
+        ValueError: the path is empty, the video or folder holds no readable frame, or a
+            frame is malformed.
         TypeError: the source or a frame has the wrong type.
     """
     if isinstance(source, (bytes, bytearray)):  # else read as an iterable of ints
         raise TypeError(f"a path must be a str or pathlib.Path, got {type(source).__name__} "
                         f"{bytes(source)[:80]!r}; decode it with os.fsdecode(path)")
     if isinstance(source, (str, os.PathLike)):
+        if not os.fspath(source).strip():  # Path("") is ".": the current folder
+            raise ValueError(f"the input path is empty ({os.fspath(source)!r}); pass a video "
+                             "file or a folder of images")
         path = Path(source)
         if not path.exists():
             raise FileNotFoundError(f"input not found: {path}")

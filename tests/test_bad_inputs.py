@@ -298,6 +298,26 @@ def prepared(setup: Callable[[Path], None], runner: Callable[[Path], Outcome]):
     return run
 
 
+def in_tmp(runner: Callable[[Path], Outcome]):
+    """Run the case with ``tmp`` as the current folder."""
+    def run(tmp: Path) -> Outcome:
+        with _chdir(tmp):
+            return runner(tmp)
+    return run
+
+
+@contextlib.contextmanager
+def _chdir(path: Path):  # contextlib.chdir of Python >= 3.11
+    import os
+
+    old = os.getcwd()
+    os.chdir(path)
+    try:
+        yield
+    finally:
+        os.chdir(old)
+
+
 def earlier_output(tmp: Path) -> None:
     from motionbits.cli import main
 
@@ -481,6 +501,8 @@ CASES: list[Case] = [
     Case("segment/empty-file", cli(S, "{a}/empty.mp4", "--out", "{t}/out"), CLEAR, "empty.mp4", absent=("out",)),
     Case("segment/text-as-mp4", cli(S, "{a}/text.mp4", "--out", "{t}/out"), CLEAR, "could not open", absent=("out",)),
     Case("segment/dev-zero", cli(S, "/dev/zero", "--out", "{t}/out"), CLEAR, "/dev/zero", absent=("out",)),
+    Case("segment/empty-path", prepared(lambda t: _write_frames(t, _F[:2]), in_tmp(cli(S, "", "--out", "{t}/out"))), CLEAR,
+         "input path is empty", absent=("out",)),  # was: segmented the current folder ("" = ".")
     Case("segment/empty-folder", cli(S, "{a}/empty_dir", "--out", "{t}/out"), CLEAR, "contains no images", absent=("out",)),
     Case("segment/folder-of-txt", cli(S, "{a}/txt_dir", "--out", "{t}/out"), CLEAR, "contains no images", absent=("out",)),
     Case("segment/mixed-sizes", cli(S, "{a}/mixed", "--out", "{t}/out", *SEG), CLEAR, "started at", absent=("out",)),
