@@ -7,8 +7,10 @@ letter in the letter style):
 form                  examples
 ====================  ===============================================================
 square brackets       ``[3]``, ``[3, 5]``, ``[3][5]``, ``[3 and 5]``, ``[mark 3]``,
-                      ``[#3]``; letter style ``[a]``, ``[a, c]``, ``[a][b]``
-round brackets        ``(3)``, ``(3, 5)`` (at most 3 digits); letter style ``(a)``
+                      ``[#3]``; letter style ``[a]``, ``[a, c]``, ``[a][b]``; also the
+                      full-width ``［3］`` and the CJK ``【3】``, ``〔3〕``, ``【3、5】``
+round brackets        ``(3)``, ``(3, 5)`` (at most 3 digits), full-width ``（3）``;
+                      letter style ``(a)``
 keyword + mark        ``mark 3``, ``Mark #3``, ``object 3``, ``objects 3, 5 and 7``,
                       ``region 2``, ``label 4``, ``mask 1``, ``segment 2``, ``item 6``,
                       ``body 3``, ``id 3``; letter style ``object A`` (upper case), or
@@ -53,7 +55,13 @@ __all__ = [
 _SURROGATE = re.compile("[\ud800-\udfff]")
 
 _KW = r"(?i:marks?|markers?|objects?|regions?|labels?|masks?|segments?|items?|ids?|bod(?:y|ies))"
-_SEP = r"(?:\s*[,;/&]\s*(?:(?i:and|or)\s+)?|\s+(?i:and|or)\s+)"
+_SEP = r"(?:\s*[,;/&\uff0c\u3001\uff1b]\s*(?:(?i:and|or)\s+)?|\s+(?i:and|or)\s+)"  # also ， 、 ；
+# brackets: ASCII, full-width and the CJK lenticular / tortoise-shell ones (Qwen answers in
+# Chinese cite marks as 【3】)
+_OPEN = r"[\[\uff3b\u3010\u3014]"
+_CLOSE = r"[\]\uff3d\u3011\u3015]"
+_ROPEN = r"[(\uff08]"
+_RCLOSE = r"[)\uff09]"
 _UNIT = (
     r"(?i:%|°|mm|cm|m|km|in|inch(?:es)?|ft|feet|px|pixels?|deg(?:rees)?|o'?clock|s|sec(?:onds?)?"
     r"|min(?:utes?)?|h|hours?|times|x|kg|g|fps)(?![A-Za-z])"
@@ -65,14 +73,14 @@ _LET = r"[A-Za-z]{1,2}(?![A-Za-z0-9])"
 
 _PATTERNS: dict[str, list[re.Pattern]] = {
     "number": [
-        re.compile(rf"\[\s*(?:{_KW}\s*)?#?({_NUM}(?:{_SEP}(?:{_KW}\s*)?#?{_NUM})*)\s*\]"),
-        re.compile(rf"\(\s*#?({_NUM3}(?:{_SEP}#?{_NUM3})*)\s*\)"),
+        re.compile(rf"{_OPEN}\s*(?:{_KW}\s*)?#?({_NUM}(?:{_SEP}(?:{_KW}\s*)?#?{_NUM})*)\s*{_CLOSE}"),
+        re.compile(rf"{_ROPEN}\s*#?({_NUM3}(?:{_SEP}#?{_NUM3})*)\s*{_RCLOSE}"),
         re.compile(rf"\b{_KW}\s*(?:#\s?|(?i:no\.?|nr\.?|number)\s*)?({_NUM_KW}(?:{_SEP}#?{_NUM_KW})*)"),
         re.compile(r"(?<![\w&#/])#\s?(\d{1,4})(?![\d\w]|\.\d)"),
     ],
     "letter": [
-        re.compile(rf"\[\s*(?:{_KW}\s*)?({_LET}(?:{_SEP}(?:{_KW}\s+)?{_LET})*)\s*\]"),
-        re.compile(r"\(\s*([A-Za-z])\s*\)"),
+        re.compile(rf"{_OPEN}\s*(?:{_KW}\s*)?({_LET}(?:{_SEP}(?:{_KW}\s+)?{_LET})*)\s*{_CLOSE}"),
+        re.compile(rf"{_ROPEN}\s*([A-Za-z])\s*{_RCLOSE}"),
         re.compile(rf"\b{_KW}\s+#?([A-Z])(?![A-Za-z0-9'])"),
         re.compile(rf"\b{_KW}\s+#?([a-z])(?=\s*(?:[,.;:!?)\]]|$)|\s+(?i:and|or)\b)"),
     ],
@@ -344,7 +352,8 @@ def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedO
             continue
         head = m.group("head")
         marks = tuple(t for t, _, _ in find_citations(head, style))
-        name = re.sub(r"\[[^\]]*\]|\([^)]*\)|[*_`\"'\[\]()]", " ", head)
+        name = re.sub(rf"{_OPEN}[^\]\uff3d\u3011\u3015]*{_CLOSE}|{_ROPEN}[^)\uff09]*{_RCLOSE}"
+                      rf"|{_OPEN}|{_CLOSE}|{_ROPEN}|{_RCLOSE}|[*_`\"']", " ", head)
         name = _ARTICLE.sub("", " ".join(name.split()).strip(" .,;:-").lower())
         if not name or name in _NONE_NAMES or len(name.split()) > _MAX_NAME_WORDS or name in seen:
             continue

@@ -38,6 +38,10 @@ NUMBER_TABLE = [
     ("The lid (2) and the pot (3) moved (by about 10 cm).", [2, 3], []),
     ("[2][2] and again [2]: the same object", [2], []),
     ("The marked item [12] is not there, but [01] is.", [1], ["12"]),
+    # Chinese answers (Qwen): full-width and CJK brackets, ideographic separators
+    ("杯子【3】被移动了，盖子［5］没有动。", [3, 5], []),
+    ("移动的物体是【2、4】和（6）。", [2, 4, 6], []),
+    ("刚体〔1〕与【mark 3，5】一起移动", [1, 3, 5], []),
 ]
 
 
@@ -54,6 +58,7 @@ LETTER_TABLE = [
     ("Object A was lifted first, then object e.", [1, 5], []),
     ("The robot grasps a block. It marks a turning point for the task.", [], []),
     ("It is labelled [z] but that mark does not exist; [3] is not a letter.", [], ["z"]),
+    ("移动的是【a】和（c）", [1, 3], []),
 ]
 
 
@@ -122,6 +127,8 @@ This line has a colon: but no bullet.
     assert objs[0].description == "a glossy red mug, slid 10 cm to the left."
     som = parse_named_objects("- [1][3] glued block: moved as one\n- [2] lid: rotated")
     assert [(o.name, o.marks) for o in som] == [("glued block", ("1", "3")), ("lid", ("2",))]
+    cjk = parse_named_objects("- 【1】【3】 glued block: moved as one\n- （2） lid: rotated")
+    assert [(o.name, o.marks) for o in cjk] == [("glued block", ("1", "3")), ("lid", ("2",))]
 
 
 def test_lone_surrogates_are_replaced_so_the_answer_encodes():
