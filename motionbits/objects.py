@@ -171,7 +171,8 @@ def check_label_map(
 
     Raises:
         TypeError: not a numpy array, or not an integer/bool dtype.
-        ValueError: not 2-D, negative ids, or a size that differs from ``shape``.
+        ValueError: not 2-D, negative ids, ids beyond int64 (uint64 maps), or a size that
+            differs from ``shape``.
     """
     if not isinstance(labels, np.ndarray):
         raise TypeError(
@@ -191,6 +192,10 @@ def check_label_map(
         raise ValueError(f"{name} must be an (H, W) label map, got shape {labels.shape}")
     if labels.size and labels.min() < 0:
         raise ValueError(f"{name} holds negative ids (min {labels.min()}); ids must be >= 0")
+    if labels.size and labels.dtype == np.uint64 and labels.max() > np.iinfo(np.int64).max:
+        # would wrap to negative ids in int64
+        raise ValueError(f"{name} holds ids too large for int64 (max {labels.max()}); "
+                         f"ids must be <= {np.iinfo(np.int64).max}")
     if shape is not None and tuple(labels.shape) != tuple(shape[:2]):
         raise ValueError(
             f"{name} has size {labels.shape[1]}x{labels.shape[0]} (W x H) but the frame is "

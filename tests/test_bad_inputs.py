@@ -741,6 +741,10 @@ CASES: list[Case] = [
          check=lambda o, t: sorted(o.value.placements) == [3, 5] and not o.value.dropped),
     Case("somprompt/max-marks-0", api(lambda t: _draw(_LAB, max_marks=0)), CLEAR, "max_marks"),
     Case("somprompt/draw-shape-mismatch", api(lambda t: _draw(_LAB, shape=(30, 30))), CLEAR, "labels"),
+    Case("somprompt/draw-uint64-huge-ids", api(lambda t: _draw(np.where(_LAB > 0, np.uint64(2**63 + 5), np.uint64(0)))),
+         CLEAR, "too large for int64"),  # was: "holds negative ids (min -9223372036854775803)"
+    Case("api/check-label-map-uint64-huge", api(lambda t: __import__("motionbits.objects").objects.check_label_map(
+        np.full((4, 4), 2**64 - 1, np.uint64))), CLEAR, "too large"),  # was: returned ids of -1
     Case("somprompt/draw-float-labels", api(lambda t: _draw(_LAB.astype(np.float32))), CLEAR, "labels"),
     Case("somprompt/draw-on-16bit-pil", api(lambda t: _draw(np.zeros((64, 64), np.int64), scene=Image.fromarray(_GRAD16))),
          CORRECT, check=lambda o, t: np.asarray(o.value.image).max() == round(_GRAD16.max() / 257)),
