@@ -178,3 +178,75 @@ def test_content_parts_and_null_content(canned):
     assert vlm.generate(_frames(1), "Q") == "the cup [1]"
     canned.reply = _reply(None)
     assert vlm.generate(_frames(1), "Q") == ""
+
+
+@pytest.fixture()
+def slow():
+    """A server that sends its headers, then waits 3 s before the body."""
+    import time
+
+    class Handler(BaseHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+        def do_POST(self):
+            self.rfile.read(int(self.headers["Content-Length"]))
+            self.send_response(200)
+            self.send_header("Content-Length", "200")
+            self.end_headers()
+            self.wfile.flush()
+            time.sleep(3)
+
+    httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=httpd.serve_forever, daemon=True).start()
+    yield f"http://127.0.0.1:{httpd.server_address[1]}/v1"
+    httpd.shutdown()
+    httpd.server_close()
+
+
+def test_a_slow_answer_is_a_timeout_naming_the_server(slow):
+    # was: a bare TimeoutError("timed out") from the socket, naming nothing
+    with pytest.raises(TimeoutError, match=r"did not answer within 0\.5 s") as info:
+        OpenAICompatibleVLM(slow, model="m", timeout=0.5).generate(_frames(1), "Q")
+    assert "127.0.0.1" in str(info.value)
+
+
+def test_a_connection_reset_while_reading_names_the_server(monkeypatch):
+    # was: a bare ConnectionResetError "[Errno 104] Connection reset by peer"
+    class Reset:
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def read(self):
+            raise ConnectionResetError(104, "Connection reset by peer")
+
+    monkeypatch.setattr("urllib.request.urlopen", lambda req, timeout=None: Reset())
+    with pytest.raises(ConnectionError, match="connection to http://h:1/v1/chat/completions failed"):
+        OpenAICompatibleVLM("http://h:1/v1", model="m").generate(_frames(1), "Q")
+
+
+@pytest.mark.parametrize("reply, words", [
+    (b"[" * 100_000 + b"]" * 100_000, "did not answer JSON"),  # was: RecursionError
+    (json.dumps({"error": {"message": "model 'm' not found", "code": 404}}).encode(),
+     "answered an error: model 'm' not found"),
+])
+def test_deep_or_error_replies_are_runtime_errors(canned, reply, words):
+    canned.reply = reply
+    with pytest.raises(RuntimeError, match=words):
+        OpenAICompatibleVLM(canned.url, model="m", timeout=5).generate(_frames(1), "Q")
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(base_url=None), "base_url must be a str"),  # was: AttributeError
+    (dict(image_format="tif"), "image_format"),  # was: KeyError 'TIF' from PIL at the first request
+    (dict(max_image_side=0), "max_image_side"),  # was: every frame sent as a 1x1 image
+    (dict(timeout=0), "timeout"),  # was: a non-blocking socket, failing at once
+    (dict(timeout=-1), "timeout"),  # was: ValueError from the socket at the first request
+])
+def test_bad_settings_fail_at_construction(kwargs, words):
+    kwargs = {"base_url": "http://localhost:8000/v1", **kwargs}
+    with pytest.raises(ValueError, match=words):
+        OpenAICompatibleVLM(model="m", **kwargs)

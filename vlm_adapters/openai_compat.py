@@ -13,6 +13,7 @@ import base64
 import http.client
 import io
 import json
+import numbers
 import os
 import urllib.error
 import urllib.request
@@ -23,6 +24,8 @@ from typing import Any
 from .base import DEFAULT_MAX_NEW_TOKENS, BaseVLM, Frame, _broadcast_prompts, to_pil_frames
 
 __all__ = ["OpenAICompatibleVLM", "encode_image_data_url"]
+
+_IMAGE_FORMATS = ("png", "jpeg", "jpg")
 
 
 def encode_image_data_url(image: Any, image_format: str = "png", max_side: int | None = None) -> str:
@@ -52,8 +55,8 @@ class OpenAICompatibleVLM(BaseVLM):
         model: the served model name (vLLM: the name given to ``vllm serve``).
         api_key: sent as ``Authorization: Bearer ...``; default ``$OPENAI_API_KEY`` if set.
         image_format: ``"png"`` or ``"jpeg"`` for the data URLs.
-        max_image_side: downscale frames so their longer side is at most this (None: as given).
-        timeout: seconds per request.
+        max_image_side: downscale frames so their longer side is at most this, >= 1 (None: as given).
+        timeout: seconds per request (None: wait for ever).
         max_workers: parallel requests in `generate_batch`.
         extra_body: extra JSON fields for every request (e.g. ``{"top_k": 1}`` for vLLM).
         name: short name for tables (default: `model`).
@@ -76,8 +79,16 @@ class OpenAICompatibleVLM(BaseVLM):
         extra_body: dict[str, Any] | None = None,
         name: str | None = None,
     ) -> None:
-        if not base_url.startswith(("http://", "https://")):
-            raise ValueError(f"base_url must start with http:// or https://, got {base_url!r}")
+        if not isinstance(base_url, str) or not base_url.startswith(("http://", "https://")):
+            raise ValueError(f"base_url must be a str starting with http:// or https://, got {base_url!r}")
+        if str(image_format).lower() not in _IMAGE_FORMATS:
+            raise ValueError(f"image_format must be 'png' or 'jpeg', got {image_format!r}")
+        if max_image_side is not None and (isinstance(max_image_side, bool) or
+                                           not isinstance(max_image_side, numbers.Integral) or max_image_side < 1):
+            raise ValueError(f"max_image_side must be None or an int >= 1, got {max_image_side!r}")
+        if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
+                                    or not timeout > 0):
+            raise ValueError(f"timeout must be None or a number of seconds > 0, got {timeout!r}")
         self.base_url = base_url.rstrip("/")
         self.model = model
         self.api_key = api_key if api_key is not None else os.environ.get("OPENAI_API_KEY")
@@ -150,9 +161,15 @@ class OpenAICompatibleVLM(BaseVLM):
         except http.client.HTTPException as exc:  # a status line or body that is not HTTP
             raise RuntimeError(f"{self.endpoint} sent a broken HTTP response ({type(exc).__name__}: "
                                f"{str(exc).strip()[:200]}); is it a chat-completions server?") from exc
+        except TimeoutError as exc:  # the answer (not the connection) took too long
+            raise TimeoutError(f"{self.endpoint} did not answer within {self.timeout} s; raise "
+                               f"timeout= for long videos or slow models") from exc
+        except OSError as exc:  # e.g. the connection reset while reading the answer
+            raise ConnectionError(f"the connection to {self.endpoint} failed while waiting for the "
+                                  f"answer ({type(exc).__name__}: {exc})") from exc
         try:
             return json.loads(raw.decode("utf-8"))
-        except ValueError as exc:  # not UTF-8, or not JSON
+        except (ValueError, RecursionError) as exc:  # not UTF-8, not JSON, or nested too deep
             raise RuntimeError(f"{self.endpoint} did not answer JSON: {raw[:500]!r}") from exc
 
     def generate(
@@ -176,6 +193,10 @@ class OpenAICompatibleVLM(BaseVLM):
             frames, prompt, system, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature, seed=seed
         )
         reply = self._post(body)
+        if isinstance(reply, dict) and reply.get("error") and "choices" not in reply:
+            err = reply["error"]
+            msg = err.get("message", err) if isinstance(err, dict) else err
+            raise RuntimeError(f"{self.endpoint} answered an error: {str(msg)[:500]}")
         try:
             content = reply["choices"][0]["message"]["content"]
         except (KeyError, IndexError, TypeError) as exc:
