@@ -241,3 +241,42 @@ def test_vlm_yoloe_method_end_to_end_with_stubs():
 def test_internvideo25_needs_explicit_trust_remote_code():
     with pytest.raises(ValueError, match="trust_remote_code=True"):
         va.InternVideo25Adapter.from_pretrained("OpenGVLab/InternVideo2_5_Chat_8B")
+
+
+def _fake_hub(monkeypatch):
+    """Stand-ins for torch and transformers whose loaders record their keyword arguments
+    and fail like transformers does for a hub id that is not in the local cache."""
+    import types
+
+    calls = []
+
+    class Loader:
+        @classmethod
+        def from_pretrained(cls, path, **kw):
+            calls.append((cls.__name__, path, kw))
+            raise OSError(f"{path} is not in the local cache and outgoing traffic is disabled")
+
+    torch = types.ModuleType("torch")
+    torch.device = lambda d: types.SimpleNamespace(type=str(d).split(":")[0])
+    torch.cuda = types.SimpleNamespace(is_available=lambda: False)
+    torch.float32, torch.bfloat16 = "float32", "bfloat16"
+    transformers = types.ModuleType("transformers")
+    for name in ("Qwen2_5_VLForConditionalGeneration", "AutoProcessor", "AutoModel", "AutoTokenizer"):
+        setattr(transformers, name, type(name, (Loader,), {}))
+    monkeypatch.setitem(sys.modules, "torch", torch)
+    monkeypatch.setitem(sys.modules, "transformers", transformers)
+    return calls
+
+
+@pytest.mark.parametrize("load", [
+    lambda: va.Qwen2_5_VLAdapter.from_pretrained("Qwen/Qwen2.5-VL-7B-Instruct"),
+    lambda: va.Qwen2_5_VLAdapter.from_pretrained("qwen-vl-local"),  # a bare name: a typo'd folder
+    lambda: va.InternVideo25Adapter.from_pretrained("OpenGVLab/InternVideo2_5_Chat_8B", trust_remote_code=True),
+])
+def test_a_hub_id_is_never_downloaded(monkeypatch, load):
+    """A name that is no local folder is looked up in the local cache only (was: passed to
+    transformers as is, which downloads the checkpoint -- and for InternVideo2.5 its code)."""
+    calls = _fake_hub(monkeypatch)
+    with pytest.raises(OSError, match="nothing is downloaded"):
+        load()
+    assert calls and all(kw.get("local_files_only") is True for _, _, kw in calls)

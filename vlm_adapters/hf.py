@@ -107,7 +107,8 @@ class TransformersVLM(BaseVLM):
         model_kwargs: dict[str, Any] | None = None,
         processor_kwargs: dict[str, Any] | None = None,
     ) -> TransformersVLM:
-        """Load model and processor from a checkpoint folder (or a hub id in the local cache).
+        """Load model and processor from a checkpoint folder (or a hub id in the local cache;
+        nothing is downloaded: ``local_files_only=True`` unless ``model_kwargs`` says otherwise).
 
         Args:
             path_or_id: a folder written by ``save_pretrained`` / downloaded from the hub.
@@ -126,12 +127,14 @@ class TransformersVLM(BaseVLM):
         model_cls = require_attr(transformers, cls.model_class_name, "vlm", cls.__name__)
         device = resolve_device(device)
         dtype = resolve_dtype(dtype, device)
-        mkw = dict(model_kwargs or {})
+        # never a download: a hub id loads from the local cache only (an id missing there
+        # fails below with the "pass a local folder" error); model_kwargs can override it
+        mkw = {"local_files_only": True, **(model_kwargs or {})}
         if attn_implementation is not None:
             mkw["attn_implementation"] = attn_implementation
         if trust_remote_code:
             mkw["trust_remote_code"] = True
-        pkw = dict(processor_kwargs or {})
+        pkw = {"local_files_only": mkw["local_files_only"], **(processor_kwargs or {})}
         if trust_remote_code:
             pkw["trust_remote_code"] = True
         try:
@@ -146,7 +149,7 @@ class TransformersVLM(BaseVLM):
             raise OSError(
                 f"could not load a {cls.model_class_name} checkpoint from '{path_or_id}': {exc}\n"
                 f"Pass a local folder holding config.json, the weights and the processor files "
-                f"(no model hub is needed when the folder is complete)."
+                f"(nothing is downloaded: a hub id is looked up in the local cache only)."
             ) from exc
         model.to(device)
         model.eval()
