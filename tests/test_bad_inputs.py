@@ -154,6 +154,9 @@ def build_assets(root: Path) -> Path:
     _write_frames(bad / "frames", frames[:3])
     Image.fromarray(_clip(1, (100, 160)).frames[0]).save(bad / "frames" / "00001.png")
     Image.fromarray(clip.gt.astype(np.uint16)).save(bad / "gt.png")
+    one = root / "data_one_frame" / "robot" / "scene_0000"
+    _write_frames(one / "frames", frames[:1])
+    Image.fromarray(clip.gt.astype(np.uint16)).save(one / "gt.png")
     pred = root / "pred" / "robot"
     pred.mkdir(parents=True)
     Image.fromarray(clip.gt.astype(np.uint16)).save(pred / "scene_0000.png")
@@ -655,6 +658,11 @@ CASES: list[Case] = [
          CLEAR, "gt.png is 160x60 but the frames are 160x120"),  # was: blamed the method
     Case("benchmark/frames-mixed-sizes", cli("benchmark", "--data", "{a}/data_mixed_frames", "--methods", "flow-cc",
                                              "--quiet"), CLEAR, "frame 00001.png is 160x100"),  # was: no scene named
+    Case("benchmark/one-frame-scene", cli("benchmark", "--data", "{a}/data_one_frame", "--methods", "flow-cc", "--quiet"),
+         CLEAR, "flow-cc failed on scene robot/scene_0000"),  # was: "need at least 2 frames ..." (which scene?)
+    Case("benchmark-api/float-prediction", api(lambda t: __import__("motionbits.eval.benchmark").eval.benchmark.run_benchmark(
+        t.parent / "assets" / "data", {"half": lambda frames: np.full(frames[0].shape[:2], 0.9)}, progress=False)),
+         CLEAR, "integer dtype"),  # was: truncated to an all-background map and scored
     Case("benchmark/unknown-method", cli("benchmark", "--data", "{a}/data", "--methods", "magic"), CLEAR, "unknown method"),
     Case("benchmark/json-is-a-folder", prepared(lambda t: (t / "j").mkdir(), cli(
         "benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--json", "{t}/j")), CLEAR, "is a folder"),

@@ -21,6 +21,7 @@ from motionbits.eval.dataset import (
 from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import write_label_map
 from motionbits.eval.metrics import FrameScores, evaluate_frame
+from motionbits.objects import check_label_map
 
 __all__ = ["run_benchmark"]
 
@@ -52,8 +53,9 @@ def run_benchmark(
         dropped with a warning on stderr instead of stopping the run.
 
     Raises:
-        ValueError: a scene's frames differ in size or from gt.png's, or a method returned
-            a label map of the wrong shape (names the scene).
+        ValueError: a scene's frames differ in size or from gt.png's, a method failed on a
+            scene (e.g. one of a single frame), or returned a label map of the wrong shape or
+            of non-integer values (names the method and the scene).
     """
     if not methods:
         raise ValueError("no method to run")
@@ -79,11 +81,16 @@ def run_benchmark(
                 unavailable[name] = str(exc)
                 print(f"benchmark: skipping method {name}: {exc}", file=sys.stderr)
                 continue
+            except ValueError as exc:  # e.g. a scene of one frame: say which scene
+                raise ValueError(f"method {name} failed on scene {scene.key} ({len(frames)} "
+                                 f"frames): {exc}") from exc
             seconds[name] += time.perf_counter() - t0
             if pred.shape != gt.shape:
                 raise ValueError(f"method {name} returned shape {pred.shape} for scene "
                                  f"{scene.key}, ground truth is {gt.shape}")
-            scores = evaluate_frame(pred.astype(np.int64), gt, ignore)
+            # integer ids only: a float map would be truncated silently by a cast
+            pred = check_label_map(pred, name=f"the label map of method {name} for scene {scene.key}")
+            scores = evaluate_frame(pred, gt, ignore)
             by_track[name].setdefault(scene.track, []).append(scores)
             per_scene[name][scene.key] = scores.to_dict()
             if save_pred is not None:
