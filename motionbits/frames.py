@@ -6,6 +6,7 @@ refused, and a clip is sampled, the same way everywhere. Imports only numpy.
 
 from __future__ import annotations
 
+import numbers
 from typing import Any
 
 import numpy as np
@@ -86,12 +87,15 @@ def sample_frame_indices(num_total: int, num_frames: int | None) -> list[int]:
     frame is always kept (the paper scores it), and the first too when two or more are
     asked for.
 
-    ``None`` or ``num_frames >= num_total`` keeps every frame.
+    ``None`` or ``num_frames >= num_total`` keeps every frame. Both are whole numbers
+    (ints, numpy's, or floats such as 8.0 from a UI slider); anything else raises TypeError.
 
     Example:
         >>> sample_frame_indices(10, 4), sample_frame_indices(10, 1)
         ([0, 3, 6, 9], [9])
     """
+    num_total = _whole("num_total", num_total)
+    num_frames = None if num_frames is None else _whole("num_frames", num_frames)
     if num_total < 1:
         raise ValueError(f"there are no frames to sample from (num_total = {num_total})")
     if num_frames is None or num_frames >= num_total:
@@ -101,3 +105,12 @@ def sample_frame_indices(num_total: int, num_frames: int | None) -> list[int]:
     if num_frames == 1:
         return [num_total - 1]
     return sorted({int(round(v)) for v in np.linspace(0, num_total - 1, num_frames)})
+
+
+def _whole(name: str, value: Any) -> int:
+    """``value`` as an int if it is a whole number (8, np.int64(8), 8.0); else TypeError
+    (True would read as 1 frame, 2.5 and NaN failed inside range() or np.linspace)."""
+    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+            or not float(value).is_integer()):
+        raise TypeError(f"{name} must be a whole number, got {type(value).__name__} {value!r:.40}")
+    return int(value)

@@ -151,6 +151,8 @@ def repair_text(text: str) -> str:
     code points becomes its character, a lone surrogate becomes U+FFFD (so one code point
     stays one, and the rest of the text keeps its offsets). Text without surrogates is
     returned as is."""
+    if not isinstance(text, str):  # else re's "expected string or bytes-like object"
+        raise TypeError(f"text must be a str, got {type(text).__name__}")
     if not _SURROGATE.search(text):
         return text
     return text.encode("utf-16-le", "surrogatepass").decode("utf-16-le", "replace")
@@ -272,24 +274,36 @@ def _known_ids(marks: Iterable[int]) -> set[int]:
     if isinstance(marks, (str, bytes)) or not isinstance(marks, Iterable):
         raise TypeError("marks must be a MarkRegistry, an iterable of object ids or None, "
                         f"got {type(marks).__name__} {marks!r:.40}")
-    known = set()
-    for i in marks:
+    return set(_whole_ids(marks, "marks"))
+
+
+def _whole_ids(values: Iterable, name: str) -> list[int]:
+    """``values`` as ints, in order; TypeError for anything but whole numbers (numpy's too)."""
+    ids = []
+    for i in values:
         whole = isinstance(i, (int, np.integer)) or (
             isinstance(i, (float, np.floating)) and float(i).is_integer())
         if isinstance(i, bool) or not whole:
-            raise TypeError(f"marks must hold integer object ids, got {type(i).__name__} {i!r:.40}")
-        known.add(int(i))
-    return known
+            raise TypeError(f"{name} must hold integer object ids, got {type(i).__name__} {i!r:.40}")
+        ids.append(int(i))
+    return ids
 
 
 def masks_for_ids(labels: np.ndarray, ids: Iterable[int]) -> dict[int, np.ndarray]:
-    """Object id -> (H, W) bool mask, for each of ``ids`` present in ``labels``."""
+    """Object id -> (H, W) bool mask, for each of ``ids`` present in ``labels``.
+
+    Raises:
+        TypeError: ``ids`` is not an iterable of whole numbers (e.g. None, or 3.7, which
+            would otherwise give the mask of 3).
+    """
     lm = check_label_map(labels)
+    if isinstance(ids, (str, bytes)) or not isinstance(ids, Iterable):
+        raise TypeError(f"ids must be an iterable of object ids, got {type(ids).__name__} {ids!r:.40}")
     out = {}
-    for i in ids:
-        m = lm == int(i)
+    for i in _whole_ids(ids, "ids"):
+        m = lm == i
         if m.any():
-            out[int(i)] = m
+            out[i] = m
     return out
 
 

@@ -46,8 +46,11 @@ def parse_mode(mode: "str | Iterable[str]") -> tuple[str, ...]:
         if mode.strip().lower() == "all":
             return MARK_PARTS
         items = mode.replace(",", "+").replace("|", "+").replace(" ", "+").split("+")
-    else:
+    elif isinstance(mode, Iterable):
         items = list(mode)
+    else:  # e.g. None: "'NoneType' object is not iterable"
+        raise TypeError(f"mode must be a str such as 'mask+contour+number' or an iterable of "
+                        f"parts, got {type(mode).__name__}")
     parts = set()
     for item in items:
         if not isinstance(item, str):

@@ -720,6 +720,14 @@ CASES: list[Case] = [
          CLEAR, "every"),
     Case("api/iter-frames-bytes-path", api(lambda t: list(__import__("motionbits.video").video.iter_frames(
         str(t / "x.mp4").encode()))), CLEAR, "os.fsdecode"),
+    Case("api/sample-indices-float", api(lambda t: __import__("motionbits").sample_frame_indices(10, 2.5)), CLEAR,
+         "num_frames must be a whole number"),  # was: "'float' object cannot be interpreted as an integer"
+    Case("api/sample-indices-bool", api(lambda t: __import__("motionbits").sample_frame_indices(10, True)), CLEAR,
+         "num_frames"),  # was: [9], True read as 1 frame
+    Case("api/sample-indices-nan", api(lambda t: __import__("motionbits").sample_frame_indices(10, float("nan"))),
+         CLEAR, "num_frames"),
+    Case("api/sample-indices-whole-float", api(lambda t: __import__("motionbits").sample_frame_indices(10, 4.0)),
+         CORRECT, check=lambda o, t: o.value == [0, 3, 6, 9]),  # a UI slider's 4.0 (was: TypeError)
     Case("api/iter-frames-int", api(lambda t: list(__import__("motionbits.video").video.iter_frames(123))), CLEAR, "unsupported"),
     Case("api/read-image-16bit", api(lambda t: (Image.fromarray(_GRAD16).save(t / "g.png"),
                                                __import__("motionbits.video").video.read_image(t / "g.png"))[1]),
@@ -768,6 +776,13 @@ CASES: list[Case] = [
     Case("somprompt/parse-marks-int", api(lambda t: _parse("[3]", marks=3)), CLEAR, "marks must be"),
     Case("somprompt/parse-marks-str", api(lambda t: _parse("[3]", marks="35")), CLEAR, "marks must be"),  # was: {3, 5}
     Case("somprompt/parse-marks-none-id", api(lambda t: _parse("[3]", marks=[3, None])), CLEAR, "integer object ids"),
+    Case("somprompt/mode-none", api(lambda t: _draw(_LAB, mode=None)), CLEAR, "mode must be"),  # was: not iterable
+    Case("somprompt/repair-text-none", api(lambda t: __import__("somprompt").repair_text(None)), CLEAR,
+         "text must be a str"),  # was: "expected string or bytes-like object, got 'NoneType'"
+    Case("somprompt/masks-for-ids-none", api(lambda t: __import__("somprompt").masks_for_ids(_LAB, None)), CLEAR,
+         "ids must be"),
+    Case("somprompt/masks-for-ids-fraction", api(lambda t: __import__("somprompt").masks_for_ids(_LAB, [3.7])),
+         CLEAR, "integer object ids"),  # was: the mask of 3
     Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),
@@ -796,6 +811,8 @@ CASES: list[Case] = [
          check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
     Case("vlm/frame-complex", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.complex64))), CLEAR, "uint8"),
     Case("vlm/frame-int32", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.int32))), CLEAR, "uint8"),
+    Case("vlm/stub-none", api(lambda t: __import__("vlm_adapters").StubVLM(None)), CLEAR,
+         "responses must be"),  # was: "'NoneType' object is not iterable"
     Case("vlm/frames-empty", api(lambda t: _stub_generate([])), CLEAR, "empty"),
 ]
 # --------------------------------------------------------------------------- tests

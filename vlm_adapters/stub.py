@@ -59,6 +59,9 @@ class StubVLM(BaseVLM):
             self._fn = responses
         elif isinstance(responses, str):
             self._answers = [responses]
+        elif not isinstance(responses, Sequence):  # e.g. None: "'NoneType' object is not iterable"
+            raise TypeError("StubVLM responses must be a str, a list of str or a callable "
+                            f"(frames, prompt) -> str, got {type(responses).__name__}")
         else:
             self._answers = list(responses)
             if not self._answers:
