@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 from typing import Iterable, Iterator, Union
 
@@ -16,6 +17,9 @@ __all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "read_i
            "is_frame_file", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+#: Files read with PIL, page by page, when given as the input (not as frames of a folder);
+#: OpenCV decodes only the first frame of an animated GIF.
+MULTI_FRAME_IMAGE_SUFFIXES = (".gif",)
 
 FrameSource = Union[str, os.PathLike, np.ndarray, Iterable[np.ndarray]]
 
@@ -99,21 +103,60 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     path = Path(path)
     try:
         with Image.open(path) as im:
-            if im.mode in ("1", "L", "P", "RGB", "RGBA", "LA", "PA", "CMYK", "YCbCr", "LAB", "HSV"):
-                return np.asarray(im.convert("RGB"))
-            arr = np.asarray(im)  # "I;16*", "I", "F": one channel of more than 8 bits
+            return _pil_to_rgb(im, f"image {path}")
+    except ValueError:
+        raise
     except Exception as exc:  # PIL raises several types for corrupt files
         raise ValueError(f"could not read image {path}: {exc}") from exc
-    arr = _to_uint8(arr, f"image {path}")
+
+
+def _pil_to_rgb(im: Image.Image, name: str) -> np.ndarray:
+    """The current page of an open PIL image as (H, W, 3) uint8 RGB (see read_image)."""
+    if im.mode in ("1", "L", "P", "RGB", "RGBA", "LA", "PA", "CMYK", "YCbCr", "LAB", "HSV"):
+        return np.asarray(im.convert("RGB"))
+    arr = _to_uint8(np.asarray(im), name)  # "I;16*", "I", "F": one channel of more than 8 bits
     return np.repeat(arr[..., None], 3, axis=2) if arr.ndim == 2 else arr[..., :3]
+
+
+def _image_pages(path: Path) -> int:
+    """How many frames an image file holds (a multi-page TIFF, an animated GIF / WebP /
+    PNG: more than one); 1 when it cannot be told."""
+    try:
+        with warnings.catch_warnings(), Image.open(path) as im:
+            warnings.simplefilter("ignore", UserWarning)  # PIL's "Corrupt EXIF data" of a cut TIFF
+            return max(1, int(getattr(im, "n_frames", 1)))
+    except Exception:  # unreadable: read_image says why
+        return 1
+
+
+def _iter_image_pages(path: Path) -> Iterator[np.ndarray]:
+    """Every page of a multi-page image file as (H, W, 3) uint8 RGB, in order."""
+    try:
+        im = Image.open(path)
+    except Exception as exc:
+        raise ValueError(f"could not read image {path}: {exc}") from exc
+    with im:
+        for k in range(_image_pages(path)):
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", UserWarning)  # the error below says it all
+                    im.seek(k)
+                page = _pil_to_rgb(im, f"frame {k} of image {path}")
+            except ValueError:
+                raise
+            except Exception as exc:  # a truncated page
+                raise ValueError(f"could not read frame {k} of image {path}: {exc}") from exc
+            yield page
 
 
 def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
     """Yield (H, W, 3) uint8 RGB frames from a video file, an image folder or arrays.
 
     Args:
-        source: path to a video file (anything OpenCV/FFmpeg decodes) or to a folder of
-            images (sorted by name; hidden files, named ``.*``, are skipped); a (T, H, W, 3) / (T, H, W) uint8 array; or an iterable
+        source: path to a video file (anything OpenCV/FFmpeg decodes), to an image file
+            (a multi-page TIFF or an animated GIF / WebP / PNG gives one frame per page)
+            or to a folder of images (sorted by name; hidden files, named ``.*``, are
+            skipped); a (T, H, W, 3) / (T, H, W) uint8 array; or an iterable
             of (H, W, 3) frames.
 
     Raises:
@@ -136,8 +179,13 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
             for i, f in enumerate(_image_files(path)):
                 yield as_rgb_frame(read_image(f), name=f"frame {i} ({f.name})")
             return
-        if path.suffix.lower() in IMAGE_SUFFIXES:
-            yield as_rgb_frame(read_image(path), name=str(path))
+        if path.suffix.lower() in IMAGE_SUFFIXES + MULTI_FRAME_IMAGE_SUFFIXES:
+            if _image_pages(path) == 1:
+                yield as_rgb_frame(read_image(path), name=str(path))
+                return
+            # a multi-page TIFF, an animated GIF / WebP / PNG: every page is a frame
+            for i, frame in enumerate(_iter_image_pages(path)):
+                yield as_rgb_frame(frame, name=f"frame {i} of {path.name}")
             return
         for i, frame in enumerate(_iter_video_file(path)):
             yield as_rgb_frame(frame, name=f"frame {i} of {path.name}")
@@ -176,11 +224,11 @@ def count_frames(source: FrameSource) -> int | None:
         path = Path(source)
         if path.is_dir():
             return sum(1 for p in path.iterdir() if is_frame_file(p))
-        if path.is_file() and path.suffix.lower() not in IMAGE_SUFFIXES:
+        if path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES + MULTI_FRAME_IMAGE_SUFFIXES:
+            return _image_pages(path)
+        if path.is_file():
             cap = cv2.VideoCapture(str(path))
             n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
             cap.release()
             return n or None
-        if path.is_file():
-            return 1
     return None

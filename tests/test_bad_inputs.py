@@ -122,6 +122,11 @@ def build_assets(root: Path) -> Path:
     for i, f in enumerate(big):
         cv2.imwrite(str(root / "rgb16" / f"{i:05d}.png"),
                     cv2.cvtColor(f, cv2.COLOR_RGB2BGR).astype(np.uint16) * 257)
+    # the 240x320 frames as one multi-page TIFF, and the small clip as an animated GIF
+    pages = [Image.fromarray(f) for f in big]
+    pages[0].save(root / "pages.tiff", save_all=True, append_images=pages[1:])
+    gif = [Image.fromarray(f) for f in frames]
+    gif[0].save(root / "anim.gif", save_all=True, append_images=gif[1:])  # GIF87a: no frame durations
     _write_frames(root / "rgba", frames, convert=lambda f: Image.fromarray(f).convert("RGBA"))
     _write_frames(root / "palette", frames, convert=lambda f: Image.fromarray(f).quantize(64))
     _write_frames(root / "float_big", frames[:3], ".tif",
@@ -526,6 +531,10 @@ CASES: list[Case] = [
     Case("segment/grey-pngs", cli(S, "{a}/grey8", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(4)),
     Case("segment/hidden-files-skipped", cli(S, "{a}/hidden", "--out", "{t}/out", *SEG), CORRECT,
          check=seg_ok(3)),  # was: "could not read image ._00001.png"
+    Case("segment/multi-page-tiff", cli(S, "{a}/pages.tiff", "--out", "{t}/out", *SEG_BIG), CORRECT,
+         check=same_labels_as("rgb8")),  # was: the first page only, 1 frame, no warning
+    Case("segment/animated-gif", cli(S, "{a}/anim.gif", "--out", "{t}/out", *SEG), CORRECT,
+         check=seg_ok(6)),  # was: 1 frame and "the header says 6 frames ... truncated or corrupt file"
     Case("segment/one-frame", cli(S, "{a}/one", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/single-image-file", cli(S, "{a}/frames/00000.png", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/unicode-paths", cli(S, "{a}/ünï cødé", "--out", "{t}/ôut put", *SEG), CORRECT, check=seg_ok(3, "ôut put")),
