@@ -7,6 +7,7 @@ writes H.264 (``avc1``), yuv420p, with the index at the front of the file
 
 from __future__ import annotations
 
+import numbers
 import os
 from fractions import Fraction
 from pathlib import Path
@@ -14,7 +15,31 @@ from typing import Iterable
 
 import numpy as np
 
-__all__ = ["H264Writer", "write_h264"]
+__all__ = ["H264Writer", "write_h264", "MAX_FPS", "VIDEO_SUFFIXES"]
+
+#: The largest frame rate an mp4 time base holds (a 32-bit numerator); above it PyAV
+#: raises OverflowError.
+MAX_FPS = 2**31 - 1
+#: Containers that take H.264 and the ``+faststart`` option.
+VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov")
+
+
+def check_video_path(path: "str | os.PathLike", fps: float) -> Path:
+    """``path`` as a Path, after checking it names an mp4 file and ``fps`` is usable.
+
+    Raises:
+        ValueError: ``fps`` is not a number in (0, MAX_FPS], or the suffix is not an mp4 one.
+        IsADirectoryError: ``path`` is a folder.
+    """
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not 0 < fps <= MAX_FPS:
+        raise ValueError(f"fps must be a number > 0 and <= {MAX_FPS}, got {fps!r}")
+    path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path} is a folder; pass the video file to write, e.g. {path / 'video.mp4'}")
+    if path.suffix.lower() not in VIDEO_SUFFIXES:
+        raise ValueError(f"{path}: an H.264 video must end in {' or '.join(VIDEO_SUFFIXES)}, "
+                         f"got {path.suffix or 'no suffix'!r}")
+    return path
 
 
 class H264Writer:
@@ -23,8 +48,8 @@ class H264Writer:
     Odd widths or heights are padded by one black pixel (yuv420p needs even sizes).
 
     Args:
-        path: output file (parent folders are created).
-        fps: frames per second (> 0).
+        path: output file, ``.mp4`` / ``.m4v`` / ``.mov`` (parent folders are created).
+        fps: frames per second (> 0, at most :data:`MAX_FPS`).
         crf: x264 quality, 0 (lossless) .. 51; 20 looks clean on overlays.
 
     Example:
@@ -38,11 +63,9 @@ class H264Writer:
     """
 
     def __init__(self, path: "str | os.PathLike", fps: float = 10.0, crf: int = 20) -> None:
-        if not fps > 0:
-            raise ValueError(f"fps must be > 0, got {fps}")
+        self.path = check_video_path(path, fps)
         import av  # core dependency; imported here so `import motionbits` stays light
 
-        self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._av = av
         self._container = av.open(str(self.path), mode="w", options={"movflags": "+faststart"})
@@ -97,7 +120,9 @@ def write_h264(frames: Iterable[np.ndarray], path: "str | os.PathLike", fps: flo
     """Write (H, W, 3) uint8 RGB frames to an H.264 mp4; returns ``path``.
 
     Raises:
-        ValueError: no frames, frames of different sizes or not RGB uint8, ``fps`` <= 0.
+        ValueError: no frames, frames of different sizes or not RGB uint8, ``fps`` not in
+            (0, MAX_FPS], or ``path`` without an mp4 suffix.
+        IsADirectoryError: ``path`` is a folder.
     """
     with H264Writer(path, fps) as writer:
         for frame in frames:

@@ -215,7 +215,9 @@ def write_mp4(frames: Sequence[ImageLike], path: "str | os.PathLike", fps: float
     """Write RGB frames to an H.264 mp4 that browsers play (see :func:`motionbits.video_writer.write_h264`).
 
     Raises:
-        ValueError: no frames, frames of different sizes, or ``fps`` <= 0.
+        ValueError: no frames, frames of different sizes, ``fps`` <= 0, or ``path`` without
+            an mp4 suffix.
+        IsADirectoryError: ``path`` is a folder.
     """
     from motionbits.video_writer import write_h264
 
@@ -223,11 +225,21 @@ def write_mp4(frames: Sequence[ImageLike], path: "str | os.PathLike", fps: float
 
 
 def write_gif(frames: Sequence[ImageLike], path: "str | os.PathLike", fps: float = 10.0) -> Path:
-    """Write RGB frames to a looping GIF (Pillow)."""
+    """Write RGB frames to a looping GIF (Pillow).
+
+    Raises:
+        ValueError: no frames, frames of different sizes, ``fps`` <= 0, or ``path`` does
+            not end in ``.gif``.
+        IsADirectoryError: ``path`` is a folder.
+    """
     arrs = _as_arrays(frames)
     if not fps > 0:
         raise ValueError(f"fps must be > 0, got {fps}")
     path = Path(path)
+    if path.is_dir():  # else PIL's "unknown file extension: "
+        raise IsADirectoryError(f"{path} is a folder; pass the GIF file to write, e.g. {path / 'marks.gif'}")
+    if path.suffix.lower() != ".gif":
+        raise ValueError(f"{path}: a GIF must end in .gif, got {path.suffix or 'no suffix'!r}")
     path.parent.mkdir(parents=True, exist_ok=True)
     images = [Image.fromarray(a) for a in arrs]
     images[0].save(path, save_all=True, append_images=images[1:], duration=int(round(1000 / fps)),

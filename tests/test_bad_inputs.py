@@ -560,6 +560,8 @@ CASES: list[Case] = [
     Case("segment/fps-negative", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "-5"), CLEAR, "--fps", absent=("out",)),
     Case("segment/fps-nan", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "nan"), CLEAR, "--fps", absent=("out",)),
     Case("segment/fps-inf", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "inf"), CLEAR, "--fps", absent=("out",)),
+    Case("segment/fps-huge", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "1e300"), CLEAR, "--fps must be at most",
+         absent=("out",)),  # was: OverflowError traceback from PyAV
     Case("segment/backend-unknown", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "cuda"), CLEAR, "backend", absent=("out",)),
     Case("segment/backend-torch-without-torch", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "torch",
                                                     patches=(no_torch_ops,)), CLEAR, "torch", absent=("out",)),
@@ -792,6 +794,14 @@ CASES: list[Case] = [
          "ids must be"),
     Case("somprompt/masks-for-ids-fraction", api(lambda t: __import__("somprompt").masks_for_ids(_LAB, [3.7])),
          CLEAR, "integer object ids"),  # was: the mask of 3
+    Case("somprompt/write-mp4-to-folder", api(lambda t: __import__("somprompt").write_mp4(list(_F), t)), CLEAR,
+         "is a folder"),  # was: PyAV's "Could not determine output format"
+    Case("somprompt/write-mp4-wrong-suffix", api(lambda t: __import__("somprompt").write_mp4(list(_F), t / "v.avi")),
+         CLEAR, "must end in .mp4"),
+    Case("somprompt/write-mp4-fps-huge", api(lambda t: __import__("somprompt").write_mp4(list(_F), t / "v.mp4", fps=1e300)),
+         CLEAR, "fps must be"),  # was: OverflowError
+    Case("somprompt/write-gif-to-folder", api(lambda t: __import__("somprompt").write_gif(list(_F), t)), CLEAR,
+         "is a folder"),  # was: PIL's "unknown file extension: "
     Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),

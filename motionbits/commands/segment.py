@@ -23,7 +23,7 @@ from motionbits.errors import InputError
 from motionbits.outputs import StagedFolder
 from motionbits.segmenter import STAGES, MotionBitsSegmenter
 from motionbits.video import count_frames, iter_frames
-from motionbits.video_writer import H264Writer
+from motionbits.video_writer import MAX_FPS, H264Writer
 
 #: What ``segment`` writes into ``--out`` (``--overwrite`` replaces only such a folder).
 OUTPUTS = {"labels", "overlay.mp4", "summary.json"}
@@ -105,6 +105,8 @@ def _check_options(args: argparse.Namespace) -> MotionBitsConfig:
         raise InputError(f"--frames must be >= 1, got {args.frames}")
     if not (math.isfinite(args.fps) and args.fps > 0):
         raise InputError(f"--fps must be a positive number, got {args.fps:g}")
+    if args.fps > MAX_FPS:  # else an OverflowError traceback from PyAV
+        raise InputError(f"--fps must be at most {MAX_FPS}, got {args.fps:g}")
     flags = {k: v for k, v in (("n_nodes", args.nodes), ("max_side", args.max_side),
                                 ("backend", args.backend), ("flow", args.flow),
                                 ("refine", args.refine), ("sam2_path", args.sam2),
