@@ -832,6 +832,12 @@ CASES: list[Case] = [
     Case("vlm/frame-int32", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.int32))), CLEAR, "uint8"),
     Case("vlm/stub-none", api(lambda t: __import__("vlm_adapters").StubVLM(None)), CLEAR,
          "responses must be"),  # was: "'NoneType' object is not iterable"
+    Case("vlm/noun-phrases-none", api(lambda t: __import__("vlm_adapters").extract_noun_phrases(None)), CLEAR,
+         "text must be a str"),  # was: "expected string or bytes-like object, got 'NoneType'"
+    Case("vlm/checkpoint-none", api(lambda t: __import__("vlm_adapters").Qwen2_5_VLAdapter.from_pretrained(None)),
+         CLEAR, "checkpoint folder"),  # was: "expected str, bytes or os.PathLike object, not NoneType"
+    Case("vlm/checkpoint-empty", api(lambda t: __import__("vlm_adapters").Qwen2_5_VLAdapter.from_pretrained("")),
+         CLEAR, "checkpoint folder"),  # was: '' passed on as a hub id
     Case("vlm/frames-empty", api(lambda t: _stub_generate([])), CLEAR, "empty"),
 ]
 # --------------------------------------------------------------------------- tests

@@ -95,6 +95,10 @@ def check_local_path(path_or_id: str | os.PathLike, what: str = "model") -> str:
     transformers, which the adapters ask for the local cache only (``local_files_only``):
     nothing is downloaded.
     """
+    if not isinstance(path_or_id, (str, os.PathLike)) or not os.fspath(path_or_id).strip():
+        # else os.fspath's "expected str, bytes or os.PathLike object, not NoneType"
+        raise TypeError(f"{what} must be a checkpoint folder (str or pathlib.Path), got "
+                        f"{type(path_or_id).__name__} {path_or_id!r:.40}")
     s = os.fspath(path_or_id)
     expanded = os.path.expanduser(s)
     looks_local = (

@@ -73,6 +73,8 @@ def extract_noun_phrases(text: str, max_words: int = 3) -> list[str]:
         >>> extract_noun_phrases("The red block slid left and the drawer opened.")
         ['red block', 'drawer']
     """
+    if not isinstance(text, str):  # else re's "expected string or bytes-like object"
+        raise TypeError(f"text must be a str, got {type(text).__name__}; the VLM produced no answer")
     phrases: list[str] = []
     seen: set[str] = set()
     for clause in re.split(r"[.,;:!?()\n\[\]]+", text):
