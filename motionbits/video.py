@@ -230,5 +230,5 @@ def count_frames(source: FrameSource) -> int | None:
             cap = cv2.VideoCapture(str(path))
             n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
             cap.release()
-            return n or None
+            return n if n > 0 else None  # some readers answer -1 or INT64_MIN: unknown
     return None

@@ -141,6 +141,7 @@ def build_assets(root: Path) -> Path:
     _write_frames(root / "thin", [np.full((8, 4000, 3), 90 + 20 * i, np.uint8) for i in range(2)])
     _write_frames(root / "tiny", [np.zeros((8, 8, 3), np.uint8)] * 2)
     _write_frames(root / "one", frames[:1])
+    (root / "png.mp4").write_bytes((root / "one" / "00000.png").read_bytes())  # a PNG named .mp4
     # frames copied from a Mac: AppleDouble "._*.png" files and a folder named like an image
     hidden = _write_frames(root / "hidden", frames[:3])
     (hidden / "._00001.png").write_bytes(b"\x00\x05\x16\x07\x00\x02\x00\x00Mac OS X")
@@ -535,6 +536,8 @@ CASES: list[Case] = [
          check=same_labels_as("rgb8")),  # was: the first page only, 1 frame, no warning
     Case("segment/animated-gif", cli(S, "{a}/anim.gif", "--out", "{t}/out", *SEG), CORRECT,
          check=seg_ok(6)),  # was: 1 frame and "the header says 6 frames ... truncated or corrupt file"
+    Case("segment/png-named-mp4", cli(S, "{a}/png.mp4", "--out", "{t}/out", *SEG), CORRECT,
+         check=seg_ok(1)),  # was: "--start 0 is past the last frame (-9223372036854775808 frames)"
     Case("segment/one-frame", cli(S, "{a}/one", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/single-image-file", cli(S, "{a}/frames/00000.png", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/unicode-paths", cli(S, "{a}/ünï cødé", "--out", "{t}/ôut put", *SEG), CORRECT, check=seg_ok(3, "ôut put")),
