@@ -97,6 +97,16 @@ def _write_video(path: Path, frames, fourcc="mp4v", fps=10) -> Path:
     return path
 
 
+def _header_frames(avi: bytes, n: int) -> bytes:
+    """An AVI whose headers (avih dwTotalFrames, strh dwLength) say ``n`` frames."""
+    import struct
+
+    b = bytearray(avi)
+    i, j = b.find(b"avih") + 8 + 16, b.find(b"strh") + 8 + 32
+    b[i:i + 4] = b[j:j + 4] = struct.pack("<I", n)
+    return bytes(b)
+
+
 def build_assets(root: Path) -> Path:
     """Every input file the cases read (a few hundred kB), under ``root``."""
     root.mkdir(parents=True, exist_ok=True)
@@ -106,6 +116,7 @@ def build_assets(root: Path) -> Path:
     _write_video(root / "clip.mp4", frames)
     avi = _write_video(root / "clip.avi", _clip(20).frames, "MJPG").read_bytes()
     (root / "cut.avi").write_bytes(avi[: len(avi) // 2])  # header says 20 frames
+    (root / "short_header.avi").write_bytes(_header_frames(avi, 10))  # 20 frames, header says 10
     (root / "empty.mp4").write_bytes(b"")
     (root / "text.mp4").write_text("not a video\n" * 50)
     (root / "empty_dir").mkdir()
@@ -536,6 +547,11 @@ CASES: list[Case] = [
          check=same_labels_as("rgb8")),  # was: the first page only, 1 frame, no warning
     Case("segment/animated-gif", cli(S, "{a}/anim.gif", "--out", "{t}/out", *SEG), CORRECT,
          check=seg_ok(6)),  # was: 1 frame and "the header says 6 frames ... truncated or corrupt file"
+    Case("segment/header-says-fewer-frames", cli(S, "{a}/short_header.avi", "--out", "{t}/out", *SEG), CORRECT,
+         check=seg_ok(20)),  # was: 10 frames, the other 10 dropped silently
+    Case("segment/start-past-header-count", cli(S, "{a}/short_header.avi", "--out", "{t}/out", "--start", "15",
+                                                "--frames", "2", *SEG), CORRECT,
+         check=lambda o, t: labels_in(t / "out") == ["00015.png", "00016.png"]),  # was: "past the last frame (10 frames)"
     Case("segment/png-named-mp4", cli(S, "{a}/png.mp4", "--out", "{t}/out", *SEG), CORRECT,
          check=seg_ok(1)),  # was: "--start 0 is past the last frame (-9223372036854775808 frames)"
     Case("segment/one-frame", cli(S, "{a}/one", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),

@@ -22,7 +22,7 @@ from motionbits.config_file import config_from_dict, load_config
 from motionbits.errors import InputError
 from motionbits.outputs import StagedFolder
 from motionbits.segmenter import STAGES, MotionBitsSegmenter
-from motionbits.video import count_frames, iter_frames
+from motionbits.video import IMAGE_SUFFIXES, MULTI_FRAME_IMAGE_SUFFIXES, count_frames, iter_frames
 from motionbits.video_writer import MAX_FPS, H264Writer
 
 #: What ``segment`` writes into ``--out`` (``--overwrite`` replaces only such a folder).
@@ -161,10 +161,10 @@ def run(args: argparse.Namespace, progress=tqdm) -> int:
     frames = itertools.chain([first], frames)
     # index of the last frame to use (the frame count of some videos is unknown: None)
     last = float("inf") if args.frames is None else args.start + args.every * (args.frames - 1)
-    if total is not None:
-        if args.start >= total:
-            raise InputError(f"--start {args.start} is past the last frame ({total} frames)")
-        last = min(last, total - 1)
+    # a video's count is its header's, which can be short: the frames then tell (the
+    # input running out ends the loop); a folder's or an array's is exact
+    if total is not None and not _is_video_file(args.input) and args.start >= total:
+        raise InputError(f"--start {args.start} is past the last frame ({total} frames)")
     with StagedFolder(args.out, overwrite=args.overwrite, replaceable=OUTPUTS) as staged:
         summary = _segment(args, seg, frames, total, last, staged.path, gt, progress)
         staged.publish()
@@ -179,6 +179,12 @@ def run(args: argparse.Namespace, progress=tqdm) -> int:
               f"background precision {scores['background_precision']:.3f}")
     print(f"wrote {out}/labels/*.png, {out}/overlay.mp4, {out}/summary.json")
     return 0
+
+
+def _is_video_file(path) -> bool:
+    """Whether ``path`` is a file read by the video decoder (its frame count is a guess)."""
+    return (path is not None and Path(path).is_file()
+            and Path(path).suffix.lower() not in IMAGE_SUFFIXES + MULTI_FRAME_IMAGE_SUFFIXES)
 
 
 def _segment(args, seg, frames, total, last, out: Path, gt, progress=tqdm) -> dict:
@@ -198,7 +204,8 @@ def _segment(args, seg, frames, total, last, out: Path, gt, progress=tqdm) -> di
     frames_done = []
     result = None
     decoded = 0  # frames read from the input
-    bar = progress(total=None if last == float("inf") else (last - args.start) // args.every + 1,
+    shown = last if total is None else min(last, max(total - 1, args.start))  # for the bar only
+    bar = progress(total=None if shown == float("inf") else (shown - args.start) // args.every + 1,
                    unit="frame", disable=True if args.quiet else None, desc="segment")
     try:
         for i, frame in enumerate(frames):
