@@ -78,6 +78,28 @@ def test_expand_inputs(tmp_path):
         expand_inputs(["*.avi"], cwd=tmp_path)
 
 
+def test_list_files_that_name_themselves(tmp_path):
+    """Was: RecursionError (a traceback) for a list naming itself or lists naming each other."""
+    a = write_clip(tmp_path / "a", frames=2)
+    (tmp_path / "self.txt").write_text("self.txt\n")
+    (tmp_path / "one.txt").write_text("a\ntwo.txt\n")
+    (tmp_path / "two.txt").write_text("one.txt\n")
+    for name in ("self.txt", "one.txt"):
+        with pytest.raises(ValueError, match=f"list file .*{name} names itself"):
+            expand_inputs([name], cwd=tmp_path)
+    assert [it.path for it in expand_inputs(["a"], cwd=tmp_path)] == [str(a)]
+    # a glob in a list skips the list itself ("*" = everything else in its folder)
+    b = write_clip(tmp_path / "sub" / "b", frames=2)
+    (tmp_path / "sub" / "all.list").write_text("*\n")
+    assert [it.path for it in expand_inputs([str(tmp_path / "sub" / "all.list")])] == [str(b)]
+
+
+def test_a_binary_list_file_is_named(tmp_path):
+    (tmp_path / "videos.txt").write_bytes(b"\xff\xfe\x00 not text")  # was: "'utf-8' codec can't decode ..."
+    with pytest.raises(ValueError, match="list file .*videos.txt is not text"):
+        expand_inputs(["videos.txt"], cwd=tmp_path)
+
+
 def test_journal_cuts_a_torn_line(tmp_path):
     j = Journal(tmp_path / "batch.jsonl")
     j.append({"input": "/a", "status": "failed", "error": "x"})

@@ -50,29 +50,42 @@ def _from_folder(folder: Path) -> list[Path]:
     return found
 
 
-def _expand(item: str, base: Path, *, from_list: bool) -> list[Path]:
+def _expand(item: str, base: Path, *, from_list: bool, reading: tuple[Path, ...] = ()) -> list[Path]:
+    """``reading``: the list files being read, outermost first (a list naming itself, or
+    lists naming each other, would recurse for ever)."""
     if any(c in item for c in "*?["):
         pattern = item if Path(item).is_absolute() else str(base / item)
         matches = sorted(glob.glob(pattern, recursive=True))
         if not matches:
             raise ValueError(f"no file matches {item!r}")
-        return [q for m in matches for q in _expand(m, base, from_list=from_list)]
+        return [q for m in matches if Path(m).resolve() not in reading  # "*" in a list: not itself
+                for q in _expand(m, base, from_list=from_list, reading=reading)]
     path = Path(item) if Path(item).is_absolute() else base / item
     if path.is_dir():
         return _from_folder(path)
     if path.suffix.lower() in LIST_SUFFIXES and path.is_file():
-        return _read_list(path)
+        return _read_list(path, reading)
     if not path.exists() and not from_list:
         raise FileNotFoundError(f"input not found: {item}")
     return [path]  # a missing file named in a list fails as a video of the batch
 
 
-def _read_list(path: Path) -> list[Path]:
+def _read_list(path: Path, reading: tuple[Path, ...] = ()) -> list[Path]:
+    key = path.resolve()
+    if key in reading:
+        chain = " -> ".join(str(p) for p in (*reading[reading.index(key):], key))
+        raise ValueError(f"list file {path} names itself (through {chain}); a list must not "
+                         "include itself")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"list file {path} is not text (UTF-8): it must name one video, "
+                         "folder or glob per line") from None
     out = []
-    for line in path.read_text().splitlines():
+    for line in text.splitlines():
         line = line.split("#", 1)[0].strip()
         if line:
-            out.extend(_expand(line, path.parent, from_list=True))
+            out.extend(_expand(line, path.parent, from_list=True, reading=(*reading, key)))
     return out
 
 
