@@ -40,8 +40,9 @@ def default_prompts_dir() -> Path:
 def _dir(prompts_dir: "str | os.PathLike | None") -> Path:
     d = Path(prompts_dir) if prompts_dir is not None else default_prompts_dir()
     if not d.is_dir():
+        what = "is a file, not a folder" if d.exists() else "does not exist"
         raise PromptError(
-            f"prompt folder {d} does not exist; pass prompts_dir=<folder of .txt templates> "
+            f"prompt folder {d} {what}; pass prompts_dir=<folder of .txt templates> "
             "(the default is the templates installed with somprompt)"
         )
     return d
@@ -61,7 +62,12 @@ def _read(name: str, prompts_dir: "str | os.PathLike | None") -> tuple[Template,
         raise PromptError(
             f"unknown prompt template {name!r} in {d}; available: {', '.join(list_prompts(d)) or '(none)'}"
         )
-    return Template(path.read_text(encoding="utf-8")), path
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:  # else a UnicodeDecodeError that names no file
+        raise PromptError(f"prompt template {path} is not UTF-8 text ({exc.reason} at byte "
+                          f"{exc.start}); save it as UTF-8") from None
+    return Template(text), path
 
 
 def _identifiers(template: Template, path: Path) -> list[str]:
@@ -124,6 +130,7 @@ def load_prompt(name: str, /, *, prompts_dir: "str | os.PathLike | None" = None,
 
 def format_mark_list(registry: MarkRegistry, ids: Iterable[int] | None = None) -> str:
     """``"[1], [2], [5]"``: the marks of ``ids`` (default: all registered), by number."""
+    _check_registry(registry)
     ids = registry.ids if ids is None else list(ids)
     texts = [registry.text(i) for i in sorted(ids, key=registry.number)]
     return ", ".join(f"[{t}]" for t in texts)
@@ -133,6 +140,7 @@ def mark_prompt_variables(registry: MarkRegistry, ids: Iterable[int] | None = No
     """``num_marks``, ``mark_list`` and ``cite_example`` for the marks of ``ids``
     (default: all registered). ``cite_example`` shows the first mark, or ``[1]`` /
     ``[a]`` when there are none."""
+    _check_registry(registry)
     ids = registry.ids if ids is None else list(ids)
     ordered = sorted(ids, key=registry.number)
     first = registry.text(ordered[0]) if ordered else ("1" if registry.style == "number" else "a")
@@ -141,3 +149,11 @@ def mark_prompt_variables(registry: MarkRegistry, ids: Iterable[int] | None = No
         "mark_list": format_mark_list(registry, ordered) if ordered else "(none)",
         "cite_example": f"[{first}]",
     }
+
+
+def _check_registry(registry: object) -> None:
+    """TypeError unless ``registry`` is a MarkRegistry (a list of ids failed with
+    "'list' object has no attribute 'ids'")."""
+    if not isinstance(registry, MarkRegistry):
+        raise TypeError(f"registry must be a somprompt.MarkRegistry (register the ids with "
+                        f"MarkRegistry().register(ids)), got {type(registry).__name__}")

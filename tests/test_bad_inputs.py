@@ -821,6 +821,13 @@ CASES: list[Case] = [
          CLEAR, "fps must be"),  # was: OverflowError
     Case("somprompt/write-gif-to-folder", api(lambda t: __import__("somprompt").write_gif(list(_F), t)), CLEAR,
          "is a folder"),  # was: PIL's "unknown file extension: "
+    Case("somprompt/prompt-not-utf8", api(lambda t: ((t / "p.txt").write_bytes(b"\xff\xfe {question}"),
+                                                      __import__("somprompt").load_prompt("p", prompts_dir=t))),
+         CLEAR, "p.txt is not UTF-8"),  # was: "'utf-8' codec can't decode byte 0xff" (which file?)
+    Case("somprompt/prompts-dir-is-a-file", api(lambda t: __import__("somprompt").list_prompts(
+        t.parent / "assets" / "clip.mp4")), CLEAR, "is a file"),  # was: "does not exist"
+    Case("somprompt/mark-list-of-a-list", api(lambda t: __import__("somprompt").format_mark_list([1, 2])), CLEAR,
+         "MarkRegistry"),  # was: "'list' object has no attribute 'ids'"
     Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),
