@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from pathlib import Path
 from typing import Iterable, Iterator, Union
@@ -14,7 +15,7 @@ from PIL import Image
 from motionbits.frames import as_rgb_array
 
 __all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "read_image",
-           "is_frame_file", "IMAGE_SUFFIXES"]
+           "is_frame_file", "frame_order", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 #: Files read with PIL, page by page, when given as the input (not as frames of a folder);
@@ -64,8 +65,15 @@ def is_frame_file(path: Path) -> bool:
             and path.is_file())
 
 
+def frame_order(path: Path) -> tuple:
+    """Sort key of frame files: by name, numbers by value, so ``2.png`` comes before
+    ``10.png`` (FFmpeg's ``%d.png``); zero-padded names keep their order."""
+    parts = re.split(r"(\d+)", path.name)
+    return tuple((0, int(t), t) if t.isdigit() else (1, t) for t in parts if t)
+
+
 def _image_files(folder: Path) -> list[Path]:
-    files = sorted(p for p in folder.iterdir() if is_frame_file(p))
+    files = sorted((p for p in folder.iterdir() if is_frame_file(p)), key=frame_order)
     if not files:
         raise ValueError(f"folder {folder} contains no images ({', '.join(IMAGE_SUFFIXES)})")
     return files
@@ -155,8 +163,8 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
     Args:
         source: path to a video file (anything OpenCV/FFmpeg decodes), to an image file
             (a multi-page TIFF or an animated GIF / WebP / PNG gives one frame per page)
-            or to a folder of images (sorted by name; hidden files, named ``.*``, are
-            skipped); a (T, H, W, 3) / (T, H, W) uint8 array; or an iterable
+            or to a folder of images (sorted by name, numbers by value: ``2.png`` before
+            ``10.png``; hidden files, named ``.*``, are skipped); a (T, H, W, 3) / (T, H, W) uint8 array; or an iterable
             of (H, W, 3) frames.
 
     Raises:

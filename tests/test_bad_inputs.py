@@ -152,6 +152,10 @@ def build_assets(root: Path) -> Path:
     _write_frames(root / "thin", [np.full((8, 4000, 3), 90 + 20 * i, np.uint8) for i in range(2)])
     _write_frames(root / "tiny", [np.zeros((8, 8, 3), np.uint8)] * 2)
     _write_frames(root / "one", frames[:1])
+    unpadded = root / "unpadded"  # FFmpeg's %d.png: 0.png .. 11.png
+    unpadded.mkdir()
+    for i, f in enumerate(_clip(12).frames):
+        Image.fromarray(f).save(unpadded / f"{i}.png")
     (root / "png.mp4").write_bytes((root / "one" / "00000.png").read_bytes())  # a PNG named .mp4
     # frames copied from a Mac: AppleDouble "._*.png" files and a folder named like an image
     hidden = _write_frames(root / "hidden", frames[:3])
@@ -554,6 +558,9 @@ CASES: list[Case] = [
          check=lambda o, t: labels_in(t / "out") == ["00015.png", "00016.png"]),  # was: "past the last frame (10 frames)"
     Case("segment/png-named-mp4", cli(S, "{a}/png.mp4", "--out", "{t}/out", *SEG), CORRECT,
          check=seg_ok(1)),  # was: "--start 0 is past the last frame (-9223372036854775808 frames)"
+    Case("api/unpadded-frame-names-in-order", api(lambda t: [int(f.mean() * 1000) for f in __import__(
+        "motionbits.video").video.iter_frames(t.parent / "assets" / "unpadded")]), CORRECT,
+         check=lambda o, t: o.value == [int(f.mean() * 1000) for f in _clip(12).frames]),  # was: 0, 1, 10, 11, 2, ...
     Case("segment/one-frame", cli(S, "{a}/one", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/single-image-file", cli(S, "{a}/frames/00000.png", "--out", "{t}/out", *SEG), CORRECT, check=seg_ok(1)),
     Case("segment/unicode-paths", cli(S, "{a}/ünï cødé", "--out", "{t}/ôut put", *SEG), CORRECT, check=seg_ok(3, "ôut put")),

@@ -102,15 +102,15 @@ def _find_scenes(root: Path) -> list[Scene]:
 
 
 def scene_frames(scene: Scene | Path) -> list[Path]:
-    """The scene's frame files in order (``frames/*`` sorted by name; hidden ``.*`` files
-    and folders are skipped)."""
-    from motionbits.video import is_frame_file
+    """The scene's frame files in order (``frames/*`` sorted by name, numbers by value;
+    hidden ``.*`` files and folders are skipped)."""
+    from motionbits.video import frame_order, is_frame_file
 
     path = scene.path if isinstance(scene, Scene) else Path(scene)
     folder = path / "frames"
     if not folder.is_dir():
         raise FileNotFoundError(f"scene {path} has no frames/ folder")
-    files = sorted(p for p in folder.iterdir() if is_frame_file(p))
+    files = sorted((p for p in folder.iterdir() if is_frame_file(p)), key=frame_order)
     if not files:
         raise ValueError(f"{folder} holds no frame images")
     return files
