@@ -129,3 +129,15 @@ def test_errors(dataset, tmp_path):
     (gt_root / "robot" / "a" / "gt.png").unlink()
     with pytest.raises(FileNotFoundError, match="gt.png"):
         evaluate_dataset(gt_root, pred_root, progress=False)
+
+
+def test_segment_output_past_99999_frames_uses_the_last(tmp_path):
+    """`segment` names frame 100000 '100000.png': it is the last, not '99999.png' (was:
+    string order picked 99999.png)."""
+    from motionbits.eval.dataset import read_prediction
+
+    last = np.zeros((4, 4), np.int32)
+    last[1:3, 1:3] = 7
+    write_label_map(tmp_path / "run" / "labels" / "99999.png", np.ones((4, 4), np.int32))
+    write_label_map(tmp_path / "run" / "labels" / "100000.png", last)
+    assert np.array_equal(read_prediction(tmp_path / "run"), last)

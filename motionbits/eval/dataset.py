@@ -190,9 +190,12 @@ def find_prediction(pred_root: str | os.PathLike, scene: Scene) -> Path | None:
 
 def read_prediction(path: str | os.PathLike) -> np.ndarray:
     """Read a prediction: a label-map PNG, or a segment output folder (last ``labels/*.png``)."""
+    from motionbits.video import frame_order
+
     path = Path(path)
-    if path.is_dir():
-        maps = sorted((path / "labels").glob("*.png")) if (path / "labels").is_dir() else []
+    if path.is_dir():  # by frame number: 100000.png (a 6-digit index) comes after 99999.png
+        maps = (sorted((path / "labels").glob("*.png"), key=frame_order)
+                if (path / "labels").is_dir() else [])
         if not maps:
             raise ValueError(f"prediction folder {path} has no labels/NNNNN.png label maps")
         path = maps[-1]
