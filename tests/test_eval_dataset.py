@@ -140,4 +140,5 @@ def test_segment_output_past_99999_frames_uses_the_last(tmp_path):
     last[1:3, 1:3] = 7
     write_label_map(tmp_path / "run" / "labels" / "99999.png", np.ones((4, 4), np.int32))
     write_label_map(tmp_path / "run" / "labels" / "100000.png", last)
+    (tmp_path / "run" / "labels" / "._100001.png").write_bytes(b"\x00\x05\x16\x07")  # macOS AppleDouble
     assert np.array_equal(read_prediction(tmp_path / "run"), last)

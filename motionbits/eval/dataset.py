@@ -194,8 +194,8 @@ def read_prediction(path: str | os.PathLike) -> np.ndarray:
 
     path = Path(path)
     if path.is_dir():  # by frame number: 100000.png (a 6-digit index) comes after 99999.png
-        maps = (sorted((path / "labels").glob("*.png"), key=frame_order)
-                if (path / "labels").is_dir() else [])
+        maps = (sorted((m for m in (path / "labels").glob("*.png") if not m.name.startswith(".")),
+                       key=frame_order) if (path / "labels").is_dir() else [])
         if not maps:
             raise ValueError(f"prediction folder {path} has no labels/NNNNN.png label maps")
         path = maps[-1]
