@@ -69,7 +69,7 @@ def frame_order(path: Path) -> tuple:
     """Sort key of frame files: by name, numbers by value, so ``2.png`` comes before
     ``10.png`` (FFmpeg's ``%d.png``); zero-padded names keep their order."""
     parts = re.split(r"(\d+)", path.name)
-    return tuple((0, int(t), t) if t.isdigit() else (1, t) for t in parts if t)
+    return tuple((0, int(t), t) if t.isdecimal() else (1, t) for t in parts if t)  # not "²"
 
 
 def _image_files(folder: Path) -> list[Path]:
