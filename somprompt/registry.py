@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 from typing import Iterable, Literal
 
 import numpy as np
@@ -96,8 +97,19 @@ class MarkRegistry:
 
     # -- building --------------------------------------------------------------------
     def register(self, ids: Iterable[int]) -> None:
-        """Give each new id in ``ids`` the next free number (in the order given)."""
+        """Give each new id in ``ids`` the next free number (in the order given).
+
+        Raises:
+            TypeError: ``ids`` is not an iterable of whole numbers (``[1.5]`` would
+                otherwise register id 1).
+            ValueError: an id <= 0.
+        """
+        if isinstance(ids, (str, bytes)) or not isinstance(ids, Iterable):
+            raise TypeError(f"ids must be an iterable of object ids, got {type(ids).__name__} {ids!r:.40}")
         for i in ids:
+            if (isinstance(i, (bool, np.bool_)) or not isinstance(i, numbers.Real)
+                    or not isinstance(i, numbers.Integral) and not float(i).is_integer()):
+                raise TypeError(f"object ids must be whole numbers, got {type(i).__name__} {i!r:.40}")
             i = int(i)
             if i <= 0:
                 raise ValueError(f"object ids must be > 0 (0 is background), got {i}")

@@ -835,6 +835,12 @@ CASES: list[Case] = [
         t.parent / "assets" / "clip.mp4")), CLEAR, "is a file"),  # was: "does not exist"
     Case("somprompt/mark-list-of-a-list", api(lambda t: __import__("somprompt").format_mark_list([1, 2])), CLEAR,
          "MarkRegistry"),  # was: "'list' object has no attribute 'ids'"
+    Case("somprompt/register-fraction", api(lambda t: __import__("somprompt").MarkRegistry().register([1.5])), CLEAR,
+         "whole numbers"),  # was: registered id 1
+    Case("somprompt/register-none", api(lambda t: __import__("somprompt").MarkRegistry().register(None)), CLEAR,
+         "ids must be an iterable"),  # was: "'NoneType' object is not iterable"
+    Case("somprompt/register-whole-float-and-huge", api(lambda t: (lambda r: (r.register([3.0, 2**2000]), r.ids)[1])(
+        __import__("somprompt").MarkRegistry())), CORRECT, check=lambda o, t: o.value == [3, 2**2000]),
     Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),
