@@ -209,7 +209,7 @@ class MotionBitsConfig:
     # "none" (default) or "sam2": each frame's masks are refined by SAM2 from `sam2_path`
     # (motionbits/refine_sam2.py; needs torch + transformers, imported only then)
     refine: str = "none"
-    sam2_path: str = ""  # SAM2 checkpoint folder (transformers format) or a hub id in the local cache
+    sam2_path: str = ""  # SAM2 checkpoint folder (transformers format) or a reachable hub id
     refine_min_iou: float = 0.5  # ours: a refined mask must overlap its motion mask this much
     # ours: ... and have at most this fraction on static background away from the motion mask
     refine_max_outside: float = 0.1

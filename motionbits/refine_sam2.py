@@ -241,8 +241,7 @@ class Sam2Refiner:
 
     @classmethod
     def from_pretrained(cls, path_or_id: str | os.PathLike, *, device: Any = None, **kwargs: Any) -> Sam2Refiner:
-        """Load ``Sam2Model`` + ``Sam2Processor`` from a local folder (or a hub id already in
-        the local cache: nothing is downloaded).
+        """Load ``Sam2Model`` + ``Sam2Processor`` from a local folder (or a reachable hub id).
 
         `kwargs` go to the constructor (`min_iou`, `max_outside`, `threads`).
 
@@ -258,17 +257,16 @@ class Sam2Refiner:
         require("torch", "sam2", "SAM2 refinement")
         model_cls = require_attr(transformers, "Sam2Model", "sam2", "SAM2 refinement")
         processor_cls = require_attr(transformers, "Sam2Processor", "sam2", "SAM2 refinement")
-        try:  # never a download: a hub id loads from the local cache only
-            model = model_cls.from_pretrained(path, local_files_only=True)
-            processor = processor_cls.from_pretrained(path, local_files_only=True)
+        try:
+            model = model_cls.from_pretrained(path)
+            processor = processor_cls.from_pretrained(path)
         except ImportError as exc:  # e.g. the image processor's torchvision fails to load
             raise MissingDependencyError(
                 f"SAM2 refinement could not load '{path_or_id}' (a module it needs failed to import): "
                 f"{type(exc.__cause__ or exc).__name__}: {exc.__cause__ or exc}. "
                 f"Repair the install: pip install \"motionbits[sam2]\"") from exc
         except OSError as exc:
-            raise OSError(f"could not load a SAM2 checkpoint from '{path_or_id}': {exc}; pass a "
-                          "local folder in transformers format (nothing is downloaded)") from exc
+            raise OSError(f"could not load a SAM2 checkpoint from '{path_or_id}': {exc}") from exc
         model.to(resolve_device(device)).eval()
         return cls(model, processor, **kwargs)
 

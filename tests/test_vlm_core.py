@@ -261,8 +261,7 @@ def _fake_hub(monkeypatch):
     torch.cuda = types.SimpleNamespace(is_available=lambda: False)
     torch.float32, torch.bfloat16 = "float32", "bfloat16"
     transformers = types.ModuleType("transformers")
-    for name in ("Qwen2_5_VLForConditionalGeneration", "AutoProcessor", "AutoModel", "AutoTokenizer",
-                 "Sam2Model", "Sam2Processor"):
+    for name in ("Qwen2_5_VLForConditionalGeneration", "AutoProcessor", "AutoModel", "AutoTokenizer"):
         setattr(transformers, name, type(name, (Loader,), {}))
     monkeypatch.setitem(sys.modules, "torch", torch)
     monkeypatch.setitem(sys.modules, "transformers", transformers)
@@ -273,7 +272,6 @@ def _fake_hub(monkeypatch):
     lambda: va.Qwen2_5_VLAdapter.from_pretrained("Qwen/Qwen2.5-VL-7B-Instruct"),
     lambda: va.Qwen2_5_VLAdapter.from_pretrained("qwen-vl-local"),  # a bare name: a typo'd folder
     lambda: va.InternVideo25Adapter.from_pretrained("OpenGVLab/InternVideo2_5_Chat_8B", trust_remote_code=True),
-    lambda: __import__("motionbits.refine_sam2").refine_sam2.Sam2Refiner.from_pretrained("facebook/sam2.1-hiera-large"),
 ])
 def test_a_hub_id_is_never_downloaded(monkeypatch, load):
     """A name that is no local folder is looked up in the local cache only (was: passed to
