@@ -92,8 +92,7 @@ def check_local_path(path_or_id: str | os.PathLike, what: str = "model") -> str:
 
     Anything that looks like a filesystem path (absolute, starts with ``.`` or ``~``, or has
     more than one ``/``) must exist. A plain ``"org/name"`` hub id is passed through to
-    transformers, which the adapters ask for the local cache only (``local_files_only``):
-    nothing is downloaded.
+    transformers, which will use its local cache or the hub.
     """
     if not isinstance(path_or_id, (str, os.PathLike)) or not os.fspath(path_or_id).strip():
         # else os.fspath's "expected str, bytes or os.PathLike object, not NoneType"

@@ -107,8 +107,7 @@ class TransformersVLM(BaseVLM):
         model_kwargs: dict[str, Any] | None = None,
         processor_kwargs: dict[str, Any] | None = None,
     ) -> TransformersVLM:
-        """Load model and processor from a checkpoint folder (or a hub id in the local cache;
-        nothing is downloaded: ``local_files_only=True`` unless ``model_kwargs`` says otherwise).
+        """Load model and processor from a checkpoint folder (or a hub id in the local cache).
 
         Args:
             path_or_id: a folder written by ``save_pretrained`` / downloaded from the hub.
@@ -127,14 +126,12 @@ class TransformersVLM(BaseVLM):
         model_cls = require_attr(transformers, cls.model_class_name, "vlm", cls.__name__)
         device = resolve_device(device)
         dtype = resolve_dtype(dtype, device)
-        # never a download: a hub id loads from the local cache only (an id missing there
-        # fails below with the "pass a local folder" error); model_kwargs can override it
-        mkw = {"local_files_only": True, **(model_kwargs or {})}
+        mkw = dict(model_kwargs or {})
         if attn_implementation is not None:
             mkw["attn_implementation"] = attn_implementation
         if trust_remote_code:
             mkw["trust_remote_code"] = True
-        pkw = {"local_files_only": mkw["local_files_only"], **(processor_kwargs or {})}
+        pkw = dict(processor_kwargs or {})
         if trust_remote_code:
             pkw["trust_remote_code"] = True
         try:
@@ -149,7 +146,7 @@ class TransformersVLM(BaseVLM):
             raise OSError(
                 f"could not load a {cls.model_class_name} checkpoint from '{path_or_id}': {exc}\n"
                 f"Pass a local folder holding config.json, the weights and the processor files "
-                f"(nothing is downloaded: a hub id is looked up in the local cache only)."
+                f"(no model hub is needed when the folder is complete)."
             ) from exc
         model.to(device)
         model.eval()

@@ -90,8 +90,7 @@ class InternVideo25Adapter(BaseVLM):
         name: str | None = None,
         model_kwargs: dict[str, Any] | None = None,
     ) -> InternVideo25Adapter:
-        """Load ``OpenGVLab/InternVideo2_5_Chat_8B`` from a local folder (or the local hub
-        cache; nothing is downloaded). Runs checkpoint code.
+        """Load ``OpenGVLab/InternVideo2_5_Chat_8B`` (or a local copy). Runs checkpoint code.
 
         Raises:
             ValueError: unless ``trust_remote_code=True`` is passed explicitly.
@@ -108,19 +107,10 @@ class InternVideo25Adapter(BaseVLM):
         require("torch", "vlm", cls.__name__)
         device = resolve_device(device)
         dtype = resolve_dtype(dtype, device)
-        # never a download (of weights or of code to run): a hub id loads from the local
-        # cache only; model_kwargs can override it
-        mkw = {"local_files_only": True, **(model_kwargs or {})}
-        try:
-            model = transformers.AutoModel.from_pretrained(path, trust_remote_code=True, dtype=dtype, **mkw)
-            tokenizer = transformers.AutoTokenizer.from_pretrained(
-                path, trust_remote_code=True, use_fast=False, local_files_only=mkw["local_files_only"])
-        except OSError as exc:
-            raise OSError(
-                f"could not load an InternVideo2.5 checkpoint from '{path_or_id}': {exc}\n"
-                f"Pass a local folder holding the checkpoint (config.json, the weights, the "
-                f"tokenizer and the checkpoint's Python files); nothing is downloaded."
-            ) from exc
+        model = transformers.AutoModel.from_pretrained(
+            path, trust_remote_code=True, dtype=dtype, **(model_kwargs or {})
+        )
+        tokenizer = transformers.AutoTokenizer.from_pretrained(path, trust_remote_code=True, use_fast=False)
         model.to(device).eval()
         vision_cfg = getattr(getattr(model, "config", None), "vision_config", None)
         image_size = getattr(vision_cfg, "image_size", 448) or 448
