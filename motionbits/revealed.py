@@ -16,10 +16,10 @@ Under a moving camera the memory follows the static world: each frame it is warp
 the camera's model of the static world (homography and parallax, ``CameraMotion.world``)
 before it is compared, so the table an arm or its passing shadow has just uncovered is
 "nothing moved" there too (births on static surfaces whose look changed were the largest
-share of the moving camera's static false positives). The cast-shadow test
-(:meth:`StaticMemory.shadowed`) is left to a still camera (measured: README, "Moving
-cameras"). A body that stood still at first and moves away reveals what it hid, which
-the memory never saw: nothing changes there. A body that comes to rest is remembered as
+share of the moving camera's static false positives), and the cast-shadow test
+(:meth:`StaticMemory.shadowed`) reads the memory so carried (README, "Moving cameras").
+A body that stood still at first and moves away reveals what it hid, which the memory
+never saw: nothing changes there. A body that comes to rest is remembered as
 it is once it is seen still, so a stopped body is never "revealed" away -- and with it
 the id of its MotionBit: when a hand (or another body, or a shadow) has passed in front
 of it, its pixels seen again as they were take that id back (:meth:`StaticMemory.restore`),
@@ -97,7 +97,7 @@ def follow_ids(ids: np.ndarray, world: np.ndarray) -> np.ndarray:
 
 
 class StaticMemory:
-    """Per-pixel look of the static world where it was last seen still (static camera).
+    """Per-pixel look of the static world where it was last seen still.
 
     Each frame, :meth:`observe` first (what is revealed), then :meth:`update`.
 
@@ -119,7 +119,6 @@ class StaticMemory:
         self.was_covered = np.zeros(shape, bool)  # looked otherwise since
         self.label = np.zeros(shape, np.int32)  # MotionBit id when last seen still (0: none)
         self._difference: np.ndarray | None = None  # this frame's, from observe()
-        self._camera_moved = False  # this frame's, from observe()
 
     def observe(self, cur: np.ndarray, cur_gray: np.ndarray, still: np.ndarray,
                 world: np.ndarray | None = None) -> np.ndarray | None:
@@ -141,7 +140,6 @@ class StaticMemory:
             did then; None when the memory is off.
         """
         self._difference = None
-        self._camera_moved = world is not None
         if self.tolerance <= 0:
             return None
         if world is not None:
@@ -190,11 +188,9 @@ class StaticMemory:
 
         Returns:
             (h, w) bool on the box; None when the memory does not hold (:meth:`observe`
-            returned None) or the camera moved (under a moving camera, retiring shadows
-            lowered the static false positives further but took bodies with them:
-            README, "Moving cameras").
+            returned None).
         """
-        if self._difference is None or self._camera_moved:
+        if self._difference is None:
             return None
         # grown by the windows' reach, so that the answer is the whole image's, cropped
         grown = grow_box(box, SHADOW_WINDOW // 2 + WINDOW // 2, self.known.shape)
@@ -223,7 +219,7 @@ class StaticMemory:
             lab: the MotionBit's id.
             box: (rows, cols) slices of its bounding box.
         """
-        if self._difference is None or self._camera_moved:
+        if self._difference is None:
             return 0.0
         mask = labels[box] == lab
         area = np.count_nonzero(mask)
