@@ -142,14 +142,8 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     if fit is None:
         return None
     # ... and the nodes that fit the epipole must reach the border themselves (an arm
-    # that enters the view joins what it carries to the border, but does not fit e), or
-    # come within one node of it: the view's outermost ring, whose flow is extrapolated
-    # where the view moves on, often misses e (pickplace under a moving camera: 2844
-    # nodes fit e at one frame, 174 of them touched the border, and the camera's whole
-    # model was refused there)
-    inliers = fit[1].reshape(grid_shape)
-    explained = inliers & _reaching_border(ndimage.binary_dilation(
-        inliers, structure=np.ones((3, 3), bool)))
+    # that enters the view joins what it carries to the border, but does not fit e)
+    explained = _reaching_border(fit[1].reshape(grid_shape))
     if explained.sum() < max(8, support * reliable.sum()):
         return None
     h, w = flow_m.shape[:2]
