@@ -173,6 +173,7 @@ class MotionBitsSegmenter:
         self._setdown = SetDown(self.config.pixel_evidence, self.config.carry_tolerance)
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._cuts = CutMemory()  # the marks at rest completed at the last frame
+        self._camera_moved = False  # the camera's motion was found at the last frame (parallax)
         if self._work_size is None:  # sized at the stream's first frame (_start)
             self._labels = self._earned = self._still = self._joined = None
             self._temporal = self._memory = self._arrivals = None
@@ -321,7 +322,9 @@ class MotionBitsSegmenter:
                 pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
                 threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
                 parallax=cfg.camera_parallax, grid_shape=(grid.rows, grid.cols),
-                reflow=self.flow if cfg.camera_reflow else None, cur=cur)
+                reflow=self.flow if cfg.camera_reflow else None, cur=cur,
+                view_moving=self._camera_moved)
+            self._camera_moved = cam is not None
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
                 dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(

@@ -26,7 +26,7 @@ def _world(gamma_band: float, body_motion: np.ndarray):
     return flow, band, body
 
 
-def _compensate(flow, parallax):
+def _compensate(flow, parallax, view_moving=False):
     grid = NodeGrid.build(H, W, 24, 5)
     pts = grid.points
     ix = np.clip(np.round(pts).astype(int), 0, [W - 1, H - 1])
@@ -34,7 +34,7 @@ def _compensate(flow, parallax):
     prev = np.random.default_rng(0).integers(0, 255, (H, W, 3), dtype=np.uint8)
     return compensate_camera(pts, back, np.ones(grid.n), flow, prev, support=0.5,
                              threshold=1.0, min_shift=0.25, parallax=parallax,
-                             grid_shape=(grid.rows, grid.cols))
+                             grid_shape=(grid.rows, grid.cols), view_moving=view_moving)
 
 
 def test_fit_epipole_finds_the_shared_point_and_leaves_a_moving_body_out():
@@ -102,3 +102,23 @@ def test_nodes_moving_along_their_epipolar_lines_are_flagged_as_parallax():
     assert not epipolar[on_body].any()
     # no parallax (a pure shift of the plane): nothing to flag
     assert _compensate(_world(0.0, np.array([4.0, 0.0]))[0], parallax=0.1).epipolar is None
+
+
+def test_in_a_moving_view_parallax_one_node_short_of_the_border_is_the_static_world():
+    # the view's outermost ring of nodes reads a motion across its epipolar lines (what
+    # just came into view gets extrapolated flow): the band's parallax, one node short of
+    # the border, is the static world's once the camera was seen moving -- not in a view
+    # that was still (a person reaching the top border of a still camera's view)
+    flow, band, body = _world(0.06, np.array([0.0, 4.0]))
+    ys, xs = np.mgrid[0:H, 0:W]
+    ring = band & ((ys < 5) | (xs < 6) | (xs >= W - 6))
+    d = np.stack([xs - E[0], ys - E[1]], -1)[ring]
+    flow[ring] += 4.0 * np.stack([-d[:, 1], d[:, 0]], -1) / np.linalg.norm(d, axis=1)[:, None]
+    inner = band & ~ring
+    inner[:, :12] = inner[:, -12:] = inner[:10] = False
+    moving = _compensate(flow, parallax=0.1, view_moving=True)
+    assert moving.homography is not None
+    assert np.median(np.linalg.norm(moving.flow[inner], axis=-1)) < 0.3
+    assert np.allclose(np.median(moving.flow[body], axis=0), [0.0, 4.0], atol=0.3)
+    still = _compensate(flow, parallax=0.1).flow
+    assert np.median(np.linalg.norm(still[inner], axis=-1)) > 2.0
