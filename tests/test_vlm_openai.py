@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import base64
+import contextlib
 import io
 import json
 import threading
@@ -127,29 +128,45 @@ def test_unreachable_server_is_a_connection_error():
         vlm.generate(_frames(1), "Q")
 
 
+class _Quiet(BaseHTTPRequestHandler):
+    """A request handler that logs nothing; :meth:`answer` reads the request and starts a
+    200 response (headers follow)."""
+
+    def log_message(self, *args):
+        pass
+
+    def answer(self):
+        self.rfile.read(int(self.headers["Content-Length"]))
+        self.send_response(200)
+
+
+@contextlib.contextmanager
+def _serve(handler):
+    """A local HTTP server with ``handler`` in a thread; yields its ``/v1`` URL."""
+    httpd = ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=httpd.serve_forever, daemon=True).start()
+    try:
+        yield f"http://127.0.0.1:{httpd.server_address[1]}/v1"
+    finally:
+        httpd.shutdown()
+        httpd.server_close()
+
+
 @pytest.fixture()
 def canned():
     """A server answering every request with the raw bytes ``canned.reply`` (a short body
     for ``canned.length`` > its size: the connection ends mid-body)."""
 
-    class Handler(BaseHTTPRequestHandler):
-        def log_message(self, *args):
-            pass
-
+    class Handler(_Quiet):
         def do_POST(self):
-            self.rfile.read(int(self.headers["Content-Length"]))
-            self.send_response(200)
+            self.answer()
             self.send_header("Content-Length", str(Handler.length or len(Handler.reply)))
             self.end_headers()
             self.wfile.write(Handler.reply)
 
     Handler.reply, Handler.length = b"", None
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
-    threading.Thread(target=httpd.serve_forever, daemon=True).start()
-    Handler.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
-    yield Handler
-    httpd.shutdown()
-    httpd.server_close()
+    with _serve(Handler) as Handler.url:
+        yield Handler
 
 
 def _reply(content) -> bytes:
@@ -185,23 +202,16 @@ def slow():
     """A server that sends its headers, then waits 3 s before the body."""
     import time
 
-    class Handler(BaseHTTPRequestHandler):
-        def log_message(self, *args):
-            pass
-
+    class Handler(_Quiet):
         def do_POST(self):
-            self.rfile.read(int(self.headers["Content-Length"]))
-            self.send_response(200)
+            self.answer()
             self.send_header("Content-Length", "200")
             self.end_headers()
             self.wfile.flush()
             time.sleep(3)
 
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
-    threading.Thread(target=httpd.serve_forever, daemon=True).start()
-    yield f"http://127.0.0.1:{httpd.server_address[1]}/v1"
-    httpd.shutdown()
-    httpd.server_close()
+    with _serve(Handler) as url:
+        yield url
 
 
 def test_a_slow_answer_is_a_timeout_naming_the_server(slow):
