@@ -151,8 +151,9 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     # 2844 nodes fitted e at one frame, 174 touched the border, and the camera's whole
     # model was refused there)
     inliers = fit[1].reshape(grid_shape)
-    explained = _reaching_border(inliers if not view_moving else ndimage.binary_dilation(
-        inliers, structure=np.ones((3, 3), bool))) & inliers
+    reach = (ndimage.binary_dilation(inliers, structure=np.ones((3, 3), bool)) if view_moving
+             else inliers)
+    explained = inliers & _reaching_border(reach)
     if explained.sum() < max(8, support * reliable.sum()):
         return None
     h, w = flow_m.shape[:2]

@@ -15,7 +15,7 @@ from PIL import Image
 from motionbits.frames import as_rgb_array
 
 __all__ = ["FrameSource", "as_rgb_frame", "iter_frames", "count_frames", "read_image",
-           "is_frame_file", "frame_order", "IMAGE_SUFFIXES"]
+           "is_frame_file", "is_video_file", "frame_order", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 #: Files read with PIL, page by page, when given as the input (not as frames of a folder);
@@ -63,6 +63,13 @@ def is_frame_file(path: Path) -> bool:
     ``._00001.png`` AppleDouble files macOS leaves on shared drives are not images)."""
     return (path.suffix.lower() in IMAGE_SUFFIXES and not path.name.startswith(".")
             and path.is_file())
+
+
+def is_video_file(path: "str | os.PathLike | None") -> bool:
+    """Whether ``path`` is a file read by the video decoder (not an image file); its frame
+    count is its header's, a guess."""
+    return (path is not None and Path(path).is_file()
+            and Path(path).suffix.lower() not in IMAGE_SUFFIXES + MULTI_FRAME_IMAGE_SUFFIXES)
 
 
 def frame_order(path: Path) -> tuple:
@@ -232,11 +239,11 @@ def count_frames(source: FrameSource) -> int | None:
         path = Path(source)
         if path.is_dir():
             return sum(1 for p in path.iterdir() if is_frame_file(p))
-        if path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES + MULTI_FRAME_IMAGE_SUFFIXES:
-            return _image_pages(path)
-        if path.is_file():
+        if is_video_file(path):
             cap = cv2.VideoCapture(str(path))
             n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else 0
             cap.release()
             return n if n > 0 else None  # some readers answer -1 or INT64_MIN: unknown
+        if path.is_file():  # an image file: its pages
+            return _image_pages(path)
     return None

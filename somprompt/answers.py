@@ -39,7 +39,7 @@ from typing import Iterable
 import numpy as np
 
 from .inputs import check_label_map
-from .registry import MarkRegistry, MarkStyle, parse_mark_text
+from .registry import MarkRegistry, MarkStyle, parse_mark_text, whole_ids
 
 __all__ = [
     "Citation",
@@ -274,19 +274,7 @@ def _known_ids(marks: Iterable[int]) -> set[int]:
     if isinstance(marks, (str, bytes)) or not isinstance(marks, Iterable):
         raise TypeError("marks must be a MarkRegistry, an iterable of object ids or None, "
                         f"got {type(marks).__name__} {marks!r:.40}")
-    return set(_whole_ids(marks, "marks"))
-
-
-def _whole_ids(values: Iterable, name: str) -> list[int]:
-    """``values`` as ints, in order; TypeError for anything but whole numbers (numpy's too)."""
-    ids = []
-    for i in values:
-        whole = isinstance(i, (int, np.integer)) or (
-            isinstance(i, (float, np.floating)) and float(i).is_integer())
-        if isinstance(i, bool) or not whole:
-            raise TypeError(f"{name} must hold integer object ids, got {type(i).__name__} {i!r:.40}")
-        ids.append(int(i))
-    return ids
+    return set(whole_ids(marks, "marks"))
 
 
 def masks_for_ids(labels: np.ndarray, ids: Iterable[int]) -> dict[int, np.ndarray]:
@@ -297,10 +285,8 @@ def masks_for_ids(labels: np.ndarray, ids: Iterable[int]) -> dict[int, np.ndarra
             would otherwise give the mask of 3).
     """
     lm = check_label_map(labels)
-    if isinstance(ids, (str, bytes)) or not isinstance(ids, Iterable):
-        raise TypeError(f"ids must be an iterable of object ids, got {type(ids).__name__} {ids!r:.40}")
     out = {}
-    for i in _whole_ids(ids, "ids"):
+    for i in whole_ids(ids, "ids"):
         m = lm == i
         if m.any():
             out[i] = m

@@ -68,6 +68,27 @@ def parse_mark_text(text: str, style: MarkStyle = "number") -> int | None:
     raise ValueError(f"unknown mark style {style!r}; use one of {_STYLES}")
 
 
+def whole_ids(values: Iterable, name: str) -> list[int]:
+    """``values`` as ints, in order.
+
+    Raises:
+        TypeError: ``values`` is not an iterable (or is a str), or holds anything but whole
+            numbers (ints, numpy's, whole floats such as 3.0; not bools): ``[1.5]`` or
+            ``[3.7]`` would otherwise read as 1 or 3.
+    """
+    if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+        raise TypeError(f"{name} must be an iterable of object ids, got "
+                        f"{type(values).__name__} {values!r:.40}")
+    ids = []
+    for i in values:
+        if (isinstance(i, (bool, np.bool_)) or not isinstance(i, numbers.Real)
+                or not isinstance(i, numbers.Integral) and not float(i).is_integer()):
+            raise TypeError(f"{name} must hold integer object ids (whole numbers), got "
+                            f"{type(i).__name__} {i!r:.40}")
+        ids.append(int(i))
+    return ids
+
+
 class MarkRegistry:
     """Remembers which mark number each object id got, so that one object keeps its number
     (and therefore its colour) on every frame of a video.
@@ -104,13 +125,7 @@ class MarkRegistry:
                 otherwise register id 1).
             ValueError: an id <= 0.
         """
-        if isinstance(ids, (str, bytes)) or not isinstance(ids, Iterable):
-            raise TypeError(f"ids must be an iterable of object ids, got {type(ids).__name__} {ids!r:.40}")
-        for i in ids:
-            if (isinstance(i, (bool, np.bool_)) or not isinstance(i, numbers.Real)
-                    or not isinstance(i, numbers.Integral) and not float(i).is_integer()):
-                raise TypeError(f"object ids must be whole numbers, got {type(i).__name__} {i!r:.40}")
-            i = int(i)
+        for i in whole_ids(ids, "ids"):
             if i <= 0:
                 raise ValueError(f"object ids must be > 0 (0 is background), got {i}")
             if i not in self._number:

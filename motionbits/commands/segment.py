@@ -22,7 +22,7 @@ from motionbits.config_file import config_from_dict, load_config
 from motionbits.errors import InputError
 from motionbits.outputs import StagedFolder
 from motionbits.segmenter import STAGES, MotionBitsSegmenter
-from motionbits.video import IMAGE_SUFFIXES, MULTI_FRAME_IMAGE_SUFFIXES, count_frames, iter_frames
+from motionbits.video import count_frames, is_video_file, iter_frames
 from motionbits.video_writer import MAX_FPS, H264Writer
 
 #: What ``segment`` writes into ``--out`` (``--overwrite`` replaces only such a folder).
@@ -163,7 +163,7 @@ def run(args: argparse.Namespace, progress=tqdm) -> int:
     last = float("inf") if args.frames is None else args.start + args.every * (args.frames - 1)
     # a video's count is its header's, which can be short: the frames then tell (the
     # input running out ends the loop); a folder's or an array's is exact
-    if total is not None and not _is_video_file(args.input) and args.start >= total:
+    if total is not None and not is_video_file(args.input) and args.start >= total:
         raise InputError(f"--start {args.start} is past the last frame ({total} frames)")
     with StagedFolder(args.out, overwrite=args.overwrite, replaceable=OUTPUTS) as staged:
         summary = _segment(args, seg, frames, total, last, staged.path, gt, progress)
@@ -179,12 +179,6 @@ def run(args: argparse.Namespace, progress=tqdm) -> int:
               f"background precision {scores['background_precision']:.3f}")
     print(f"wrote {out}/labels/*.png, {out}/overlay.mp4, {out}/summary.json")
     return 0
-
-
-def _is_video_file(path) -> bool:
-    """Whether ``path`` is a file read by the video decoder (its frame count is a guess)."""
-    return (path is not None and Path(path).is_file()
-            and Path(path).suffix.lower() not in IMAGE_SUFFIXES + MULTI_FRAME_IMAGE_SUFFIXES)
 
 
 def _segment(args, seg, frames, total, last, out: Path, gt, progress=tqdm) -> dict:

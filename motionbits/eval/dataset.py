@@ -27,13 +27,13 @@ from tqdm import tqdm
 from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
+from motionbits.video import frame_order, is_frame_file
 
 __all__ = [
     "Scene", "discover_scenes", "is_scene", "scene_frames", "load_frames", "load_ground_truth",
     "load_scene",
     "find_prediction", "read_prediction", "evaluate_dataset", "average_blocks", "summarize_tracks",
 ]
-
 
 
 @dataclass(frozen=True)
@@ -104,8 +104,6 @@ def _find_scenes(root: Path) -> list[Scene]:
 def scene_frames(scene: Scene | Path) -> list[Path]:
     """The scene's frame files in order (``frames/*`` sorted by name, numbers by value;
     hidden ``.*`` files and folders are skipped)."""
-    from motionbits.video import frame_order, is_frame_file
-
     path = scene.path if isinstance(scene, Scene) else Path(scene)
     folder = path / "frames"
     if not folder.is_dir():
@@ -190,11 +188,9 @@ def find_prediction(pred_root: str | os.PathLike, scene: Scene) -> Path | None:
 
 def read_prediction(path: str | os.PathLike) -> np.ndarray:
     """Read a prediction: a label-map PNG, or a segment output folder (last ``labels/*.png``)."""
-    from motionbits.video import frame_order
-
     path = Path(path)
     if path.is_dir():  # by frame number: 100000.png (a 6-digit index) comes after 99999.png
-        maps = (sorted((m for m in (path / "labels").glob("*.png") if not m.name.startswith(".")),
+        maps = (sorted((m for m in (path / "labels").glob("*.png") if is_frame_file(m)),
                        key=frame_order) if (path / "labels").is_dir() else [])
         if not maps:
             raise ValueError(f"prediction folder {path} has no labels/NNNNN.png label maps")

@@ -20,10 +20,9 @@ import cv2
 import numpy as np
 
 from motionbits.eval.labelmaps import read_label_map, write_label_map
+from motionbits.video import frame_order, is_frame_file
 
 __all__ = ["scenes_from_sequence"]
-
-_IMG = (".jpg", ".jpeg", ".png", ".bmp")
 
 
 def _folders(src: Path) -> tuple[Path, Path]:
@@ -78,8 +77,7 @@ def scenes_from_sequence(
     if not src.is_dir():
         raise FileNotFoundError(f"sequence folder not found: {src}")
     frame_dir, gt_dir = _folders(src)
-    frames = sorted(p for p in frame_dir.iterdir() if p.suffix.lower() in _IMG
-                    and not p.name.startswith(".") and p.is_file())
+    frames = sorted((p for p in frame_dir.iterdir() if is_frame_file(p)), key=frame_order)
     if len(frames) < length:
         raise ValueError(f"{frame_dir} holds {len(frames)} frames, fewer than --length {length}")
     name = name or src.resolve().name
