@@ -28,12 +28,15 @@ unless that MotionBit moves now or was retired.
 
 from __future__ import annotations
 
+from collections.abc import Collection
+
 import cv2
 import numpy as np
 
 from motionbits.boxes import grow_box
 
-__all__ = ["StaticMemory", "light_change", "follow_known", "follow_look", "follow_ids"]
+__all__ = ["StaticMemory", "light_change", "follow_known", "follow_look", "follow_ids",
+           "carry_at_rest"]
 
 #: px, side of the square over which grey-level differences are averaged.
 WINDOW = 5
@@ -94,6 +97,45 @@ def follow_ids(ids: np.ndarray, world: np.ndarray) -> np.ndarray:
     """An (H, W) int32 map of ids carried along ``world`` (nearest; 0 off the frame)."""
     return cv2.remap(ids.astype(np.float32), world, None, cv2.INTER_NEAREST,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0.0).astype(np.int32)
+
+
+def carry_at_rest(prior: np.ndarray, valid: np.ndarray, labels: np.ndarray,
+                  world: np.ndarray, resting: Collection[int], consistent: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Under a moving camera, the MotionBits at rest carried with the static world's model
+    instead of the flow (ours).
+
+    A body at rest moves with the static world: the camera's model (homography and
+    parallax, smooth) carries its mask where the flow (noisy at its outline, smeared
+    where it meets a moving body) frays it a little more each frame.
+
+    Args:
+        prior: (H, W) int32 last frame's labels carried by the flow.
+        valid: (H, W) bool, where ``prior`` is trustworthy.
+        labels: (H, W) int32 last frame's labels.
+        world: (H, W, 2) float32, where each pixel's static world was at the last frame.
+        resting: ids at rest at the last frame.
+        consistent: (H, W) bool, where the current frame looks like the last one carried
+            by ``world`` (the stabilised previous frame).
+
+    Returns:
+        ``prior`` and ``valid`` with the resting ids' pixels taken from ``labels`` carried
+        by ``world`` (valid where ``consistent``); the same objects if none rests.
+    """
+    rest = np.fromiter(resting, np.int64)
+    if not rest.size:
+        return prior, valid
+    followed = follow_ids(labels, world)
+    new = np.isin(followed, rest)
+    old = np.isin(prior, rest)
+    if not (new.any() or old.any()):
+        return prior, valid
+    # the flow's pixels of a resting id give way; a resting id's pixels by the model take
+    # what the flow left free or gave to another resting id
+    take = new & ((prior == 0) | old)
+    prior = np.where(take, followed, np.where(old, 0, prior))
+    valid = np.where(take, consistent, valid)
+    return prior, valid
 
 
 class StaticMemory:

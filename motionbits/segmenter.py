@@ -47,7 +47,7 @@ from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
 from motionbits.retirement import Origin, retire, retire_shadows
-from motionbits.revealed import StaticMemory
+from motionbits.revealed import StaticMemory, carry_at_rest
 from motionbits.setdown import SetDown
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
@@ -174,6 +174,7 @@ class MotionBitsSegmenter:
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._cuts = CutMemory()  # the marks at rest completed at the last frame
         self._camera_moved = False  # the camera's motion was found at the last frame (parallax)
+        self._resting: set[int] = set()  # ids at rest at the last frame
         if self._work_size is None:  # sized at the stream's first frame (_start)
             self._labels = self._earned = self._still = self._joined = None
             self._temporal = self._memory = self._arrivals = None
@@ -325,6 +326,17 @@ class MotionBitsSegmenter:
                 reflow=self.flow if cfg.camera_reflow else None, cur=cur,
                 view_moving=self._camera_moved)
             self._camera_moved = cam is not None
+            if prev_m is not self._prev:  # the camera-stabilised frame ("nothing moved");
+                prev_g = _gray(prev_m)  # pulling it back along flow_m gives ``pulled`` again
+            if world is not None and self._resting:
+                # the MotionBits at rest follow the static world's model, not the flow
+                prior, prior_valid = carry_at_rest(
+                    prior, prior_valid, self._labels, world, self._resting,
+                    appearance_consistent(cur_g, prev_g, gradient,
+                                          tolerance=cfg.carry_tolerance,
+                                          gradient_gain=cfg.carry_gradient))
+                prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]],
+                                       prior[ix[:, 1], ix[:, 0]], 0)
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
                 dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(
@@ -360,8 +372,6 @@ class MotionBitsSegmenter:
                 block_fn=self._ops.mcl_block)
 
         with self._stage("masks"):
-            if prev_m is not self._prev:  # the camera-stabilised frame ("nothing moved");
-                prev_g = _gray(prev_m)  # pulling it back along flow_m gives ``pulled`` again
             # computed only if some cluster is a candidate for a new MotionBit
             win = max(EVIDENCE_WINDOW, int(round(max(grid.cell))) | 1)
             # "nothing moved" explains a pixel also when only the light changed on it
@@ -470,6 +480,7 @@ class MotionBitsSegmenter:
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
+            self._resting = set(present.tolist()) - moving
             standing = standing_still(speed, reliable, cfg.move_threshold)
             self._still = seen_still(still_seen, standing, self.frame_index)
             calm = self._memory.update(cur, cur_g, prev_g, standing, labels)

@@ -116,3 +116,32 @@ def test_panning_camera_gives_no_motionbit_to_the_static_world():
             iou = (car & (last.labels > 0)).sum() / (car | (last.labels > 0)).sum()
             assert iou > 0.7, iou
     assert len(off_car[0.0]) >= 1, off_car
+
+
+def test_carry_at_rest_follows_the_static_world_not_the_flow():
+    from motionbits.flow import pixel_grid
+    from motionbits.revealed import carry_at_rest
+
+    h, w = 40, 60
+    last = np.zeros((h, w), np.int32)
+    last[10:20, 20:30] = 1  # at rest
+    last[25:35, 40:50] = 2  # moving
+    xs, ys = pixel_grid(h, w)
+    world = np.stack([xs + 3, ys], -1).astype(np.float32)  # the view moved 3 px to the right
+    # the flow's carry frays the body at rest and leaves a stray pixel of it behind
+    prior = np.zeros((h, w), np.int32)
+    prior[11:19, 18:26] = 1
+    prior[5, 5] = 1
+    prior[26:36, 41:51] = 2
+    valid = np.ones((h, w), bool)
+    consistent = np.ones((h, w), bool)
+    consistent[10, 17] = False  # where the image says otherwise
+    out, out_valid = carry_at_rest(prior, valid, last, world, {1}, consistent)
+    expected = np.zeros((h, w), bool)
+    expected[10:20, 17:27] = True
+    np.testing.assert_array_equal(out == 1, expected)
+    np.testing.assert_array_equal(out == 2, prior == 2)  # a moving body keeps the flow's carry
+    assert not out_valid[10, 17] and out_valid[out == 1].sum() == expected.sum() - 1
+    # nothing at rest: the same objects back
+    same = carry_at_rest(prior, valid, last, world, set(), consistent)
+    assert same[0] is prior and same[1] is valid
