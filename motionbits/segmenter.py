@@ -313,12 +313,11 @@ class MotionBitsSegmenter:
             pts = grid.points
             ix = np.clip(np.round(pts).astype(np.int64), 0, [grid.width - 1, grid.height - 1])
             hist_nodes = history[ix[:, 1], ix[:, 0]]
-            prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             seen_pts = pts + sample_bilinear(flow_back, pts)  # where the nodes came from
             node_err = sample_bilinear(fb_err[..., None], pts)[:, 0]
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
-            # label maps are still carried with the true flow
+            # label maps are still carried with the true flow (but those at rest)
             flow_m, prev_m, back_pts, cam, epipolar, world = compensate_camera(
                 pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
                 threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
@@ -335,8 +334,7 @@ class MotionBitsSegmenter:
                     appearance_consistent(cur_g, prev_g, gradient,
                                           tolerance=cfg.carry_tolerance,
                                           gradient_gain=cfg.carry_gradient))
-                prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]],
-                                       prior[ix[:, 1], ix[:, 0]], 0)
+            prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
                 dtype=self._dtype, nodes=None if cfg.exact else nodes_to_fit(
