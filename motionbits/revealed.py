@@ -23,7 +23,9 @@ never saw: nothing changes there. A body that comes to rest is remembered as
 it is once it is seen still, so a stopped body is never "revealed" away -- and with it
 the id of its MotionBit: when a hand (or another body, or a shadow) has passed in front
 of it, its pixels seen again as they were take that id back (:meth:`StaticMemory.restore`),
-unless that MotionBit moves now or was retired.
+unless that MotionBit moves now or was retired. The MotionBits at rest follow the same
+model: under a moving camera their labels are carried with it rather than with the flow
+(:func:`carry_at_rest`; README, "Moving cameras", round 24).
 """
 
 from __future__ import annotations
