@@ -19,6 +19,15 @@ on 2 CPU cores, and completing every moving mark took the segmenter from 2.9x to
 its flow stage's time on the built-in clip, whose bodies' masks already end at their
 edges.
 
+Within a stream, the cut also knows what the scene looked like before (:class:`FirstLook`,
+each pixel as first seen standing still and unlabelled): pixels within the box that now
+look otherwise, other than by a cast shadow, start on the body's side of the cut. A
+body's faces that its motion did not mark (a cylinder's dark side under its textured
+top) differ from the table first seen there, so its colours enter the body's model
+instead of the background's; pixels that still look as first seen stay on the
+background's side unless their colours say otherwise (the body's top may be the
+table's colour).
+
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
 on the mark's exact outline, and a block at rest was completed at one frame and not at
@@ -37,9 +46,10 @@ import numpy as np
 
 from motionbits.boxes import at_border, grow_box, label_boxes
 from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
-from motionbits.revealed import SHADOW_CHROMA, SHADOW_GAIN
+from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
+                                 follow_known, follow_look, light_change)
 
-__all__ = ["complete_masks", "CutMemory", "COMPLETION_REACH", "COMPLETION_SIDE",
+__all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "COMPLETION_SIDE",
            "OPEN_OUTLINE_SHARE"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
@@ -73,7 +83,8 @@ RECALL_LEVEL = 12
 
 def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[int] = (),
                    gradient: np.ndarray | None = None,
-                   memory: CutMemory | None = None) -> np.ndarray:
+                   memory: CutMemory | None = None,
+                   first_look: FirstLook | None = None) -> np.ndarray:
     """Grow each mask that reaches no image border over the rest of its body (GrabCut):
     every mask at rest, a moving one where its outline stops inside its body.
 
@@ -87,6 +98,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             as they are.
         memory: the cuts found at earlier frames of a stream (:class:`CutMemory`), updated
             in place; None: every mask is cut anew.
+        first_look: the scene as first seen in the stream (:class:`FirstLook`); None:
+            the cut starts from the mask alone.
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
@@ -110,7 +123,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         cut = None if memory is None or label in moving else memory.recall(label_map, label,
                                                                              box, rgb)
         if cut is None:
-            cut = _cut(label_map, label, box, rgb, out)
+            cut = _cut(label_map, label, box, rgb, out, first_look)
         if cut is None:
             continue
         if label not in moving:
@@ -137,9 +150,11 @@ class _Cut:
 
 
 def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.ndarray,
-         out: np.ndarray) -> _Cut | None:
+         out: np.ndarray, first_look: FirstLook | None = None) -> _Cut | None:
     """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
-    around it, where no mask of ``out`` is yet; None where it finds none."""
+    around it, where no mask of ``out`` is yet -- starting on the body's side, with the
+    mask, from what looks otherwise than ``first_look`` saw there; None where it finds
+    none."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
     reach = int(COMPLETION_REACH * side) + COMPLETION_MARGIN
     rows, cols = grow_box(box, reach, label_map.shape)
@@ -147,6 +162,8 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
     trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
     f = COMPLETION_FRAME
     trimap[f:-f, f:-f] = cv2.GC_PR_BGD
+    if first_look is not None:
+        trimap[first_look.changed(rgb, (rows, cols)) & (trimap == cv2.GC_PR_BGD)] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
@@ -202,6 +219,52 @@ class CutMemory:
     def keep(self, cuts: dict[int, _Cut]) -> None:
         """Remember these cuts (label -> cut) instead of the last frame's."""
         self._cuts = cuts
+
+
+class FirstLook:
+    """Each pixel's look when it was first seen standing still and unlabelled (one
+    stream): the scene before anything moved there.
+
+    Unlike :class:`motionbits.arrivals.Arrivals`' memory it is never overwritten: a body
+    set down keeps differing from it however long it rests, and so do the faces of a
+    body that its motion did not mark.
+
+    Args:
+        shape: (H, W) of the working frames.
+        covered: grey levels (``WINDOW`` mean, largest channel) by which a pixel must
+            differ from its first look to look otherwise (config ``reveal_covered``).
+    """
+
+    def __init__(self, shape: tuple[int, int], covered: float) -> None:
+        self.covered = covered
+        self.look = np.zeros((*shape, 3), np.uint8)
+        self.known = np.zeros(shape, bool)
+
+    def update(self, cur: np.ndarray, calm: np.ndarray, labels: np.ndarray) -> None:
+        """Remember the (H, W, 3) uint8 frame ``cur`` where it is seen for the first
+        time standing still (``calm``, (H, W) bool) and unlabelled (``labels``, (H, W)
+        int32)."""
+        first = calm & (labels == 0) & ~self.known
+        cv2.copyTo(cur, first.view(np.uint8), self.look)
+        self.known |= first
+
+    def follow(self, world: np.ndarray) -> None:
+        """Carry the memory along a moving camera (``world``, (H, W, 2) float32,
+        ``CameraMotion.world``), as :meth:`motionbits.arrivals.Arrivals.follow` does."""
+        self.look = follow_look(self.look, world)
+        self.known = follow_known(self.known, world)
+
+    def changed(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+        """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
+        ``rgb`` that look otherwise than first seen, other than by a cast shadow (the
+        same chromaticity within ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the
+        brightness, ``SHADOW_WINDOW`` means)."""
+        now, then = rgb[box], self.look[box]
+        changed = self.known[box] & (_color_difference(now, then) > self.covered)
+        window = (SHADOW_WINDOW, SHADOW_WINDOW)
+        chroma, gain, _, _ = light_change(cv2.blur(now, window), cv2.blur(then, window))
+        return changed & ~((chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0])
+                           & (gain < SHADOW_GAIN[1]))
 
 
 def _inside(box: tuple[slice, slice], outer: tuple[slice, slice]) -> bool:

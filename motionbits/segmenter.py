@@ -20,7 +20,7 @@ from motionbits.backend import make_ops
 from motionbits.boxes import label_areas, nonzero_box, run_counts
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
-from motionbits.completion import CutMemory, complete_masks
+from motionbits.completion import CutMemory, FirstLook, complete_masks
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
     appearance_consistent, forgive_misalignment, gradient_magnitude, motion_gain, pull_back,
@@ -177,7 +177,7 @@ class MotionBitsSegmenter:
         self._resting: set[int] = set()  # ids at rest at the last frame
         if self._work_size is None:  # sized at the stream's first frame (_start)
             self._labels = self._earned = self._still = self._joined = None
-            self._temporal = self._memory = self._arrivals = None
+            self._temporal = self._memory = self._arrivals = self._first_look = None
             return
         hw, ww = self._work_size
         self._labels = np.zeros((hw, ww), np.int32)  # working-resolution labels
@@ -190,6 +190,7 @@ class MotionBitsSegmenter:
                                     self.config.reveal_covered)
         self._arrivals = Arrivals((hw, ww), self.config.reveal_covered,  # arrivals.py
                                   self.config.carry_tolerance)
+        self._first_look = FirstLook((hw, ww), self.config.reveal_covered)  # completion.py
 
     # ------------------------------------------------------------------ helpers
     @contextmanager
@@ -439,6 +440,7 @@ class MotionBitsSegmenter:
             # (under a moving camera the memory follows the static world's model first)
             if world is not None:
                 self._arrivals.follow(world)
+                self._first_look.follow(world)
             labels, held, born, self._next_id = self._arrivals.place(
                 labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving),
                 moving, int(round(max(grid.cell))), self._next_id)
@@ -484,6 +486,7 @@ class MotionBitsSegmenter:
             calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
             if calm is not None:
                 self._arrivals.update(cur, calm, labels)
+                self._first_look.update(cur, calm, labels)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g
@@ -515,7 +518,7 @@ class MotionBitsSegmenter:
             # and each mark seen whole takes the rest of its body by colour (a moving one
             # only where its outline stops inside its body)
             shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient,
-                                   self._cuts)
+                                   self._cuts, self._first_look if calm is not None else None)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

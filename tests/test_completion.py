@@ -3,7 +3,7 @@
 import cv2
 import numpy as np
 
-from motionbits.completion import complete_masks
+from motionbits.completion import FirstLook, complete_masks
 from motionbits.evidence import gradient_magnitude
 
 
@@ -144,3 +144,43 @@ def test_a_cut_found_for_a_mark_at_rest_is_used_again_until_the_image_changes(mo
     complete_masks(np.zeros_like(labels), covered, memory=memory)  # a frame without marks
     complete_masks(shrunk, covered, memory=memory)  # forgets them
     assert len(calls) == 3
+
+
+def test_the_faces_that_differ_from_the_scene_first_seen_join_the_body_and_shadows_do_not():
+    """A block's red top is marked; its purple side face is not, nor is its shadow. From
+    the mark alone the side's colour goes to the background's model; with the table as
+    first seen, the side -- unlike the table there before, not as a shadow would be --
+    starts on the body's side and is taken, while the shadow (the table, dimmed) is not."""
+    table = _table()
+    rgb = table.copy()
+    top = np.zeros((240, 320), bool)
+    top[80:116, 120:180] = True
+    side = np.zeros_like(top)
+    side[116:140, 120:180] = True
+    shadow = np.zeros_like(top)
+    shadow[140:160, 110:200] = True
+    rgb[top] = (200, 40, 40)
+    rgb[side] = (90, 30, 110)
+    rgb[shadow] = (table[shadow] * 0.5).astype(np.uint8)
+    labels = np.where(top, 3, 0).astype(np.int32)
+    first = FirstLook((240, 320), covered=20.0)
+    first.update(table, np.ones((240, 320), bool), np.zeros((240, 320), np.int32))
+    plain = complete_masks(labels, rgb)
+    assert (plain[side] == 3).mean() < 0.5
+    out = complete_masks(labels, rgb, first_look=first)
+    assert (out[side] == 3).mean() > 0.95
+    assert (out[shadow] == 0).mean() > 0.95
+    assert (out[~(top | side | shadow)] == 0).mean() > 0.999
+
+
+def test_the_scene_first_seen_is_kept_where_it_was_first_seen():
+    """Only a pixel's first still, unlabelled look is remembered."""
+    first = FirstLook((4, 4), covered=20.0)
+    calm = np.zeros((4, 4), bool)
+    calm[:, :2] = True
+    labels = np.zeros((4, 4), np.int32)
+    labels[0, 0] = 1
+    first.update(np.full((4, 4, 3), 10, np.uint8), calm, labels)
+    first.update(np.full((4, 4, 3), 200, np.uint8), np.ones((4, 4), bool), labels)
+    assert (first.look[1:, :2] == 10).all() and (first.look[:, 2:] == 200).all()
+    assert not first.known[0, 0] and first.known.sum() == 15
