@@ -41,6 +41,7 @@ import numpy as np
 from motionbits.boxes import grow_box, label_areas, nonzero_box
 from motionbits.evidence import photometric_residual
 from motionbits.merging import STILL
+from motionbits.nodes import binary_fill_holes
 from motionbits.retirement import MIN_SEPARATION, Origin, origin_residuals
 from motionbits.twists import rigid_matrix
 
@@ -220,7 +221,8 @@ class SetDown:
         """Take new MotionBits found at rest otherwise (:class:`motionbits.arrivals.Arrivals`;
         id -> the id they were left by) as pieces set down at this frame, confirmed at the
         next frame if they still stand there. A solid piece (an opening by a square of
-        ``SOLID_CELLS`` grid cells keeps ``COMPACT_SHARE`` of it) is shown at once, unless
+        ``SOLID_CELLS`` grid cells keeps ``COMPACT_SHARE`` of it, holes filled: a
+        cylinder's top whose middle has the table's colour is solid) is shown at once, unless
         a moving MotionBit holds ``BESIDE_MOVING_SHARE`` of the ring around it (then it may
         be a part of that body its motion missed); the others from the next frame.
 
@@ -238,7 +240,7 @@ class SetDown:
             self.parent[i] = parent
             box = grow_box(nonzero_box(piece), side, labels.shape)
             ring = labels[box][(cv2.dilate(piece[box].view(np.uint8), square) > 0) & ~piece[box]]
-            if (not _compact(piece[box], square) or (
+            if (not _compact(binary_fill_holes(piece[box]), square) or (
                     ring.size and np.isin(ring, list(moving)).mean() >= BESIDE_MOVING_SHARE)):
                 self.held_back.add(i)
 

@@ -202,6 +202,7 @@ def test_a_block_carried_hidden_gets_a_motionbit_of_its_own_once_uncovered(seed)
 
 @pytest.mark.parametrize("shape, around, moving, shown", [
     ("block", 0, set(), True),      # a block found at rest: shown at once
+    ("holed", 0, set(), True),      # with a hole (its middle the table's colour): too
     ("sliver", 0, set(), False),    # a shadow edge's sliver: only once it still stands
     ("block", 7, {7}, False),       # inside a moving mark: maybe a part its motion missed
     ("block", 7, set(), True),      # inside a mark at rest: shown
@@ -210,8 +211,10 @@ def test_a_solid_arrival_is_shown_at_once_unless_a_moving_mark_surrounds_it(
         shape, around, moving, shown):
     labels = np.zeros((120, 160), np.int32)
     labels[30:80, 40:90] = around
-    if shape == "block":
+    if shape in ("block", "holed"):
         labels[BLOCK] = 8
+        if shape == "holed":
+            labels[52:58, 62:68] = 0  # no 13 px square (SOLID_CELLS) fits beside it
     else:
         labels[BLOCK[0], 50:53] = 8  # 30 x 3 px
     setdown = SetDown(evidence=3.0, rest=REST)
