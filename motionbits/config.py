@@ -184,7 +184,9 @@ class MotionBitsConfig:
     # ours (motionbits/revealed.py): with a still camera, a pixel that looks as it did when
     # last seen standing still -- within reveal_tolerance grey levels (5x5 mean; 0 = off)
     # -- after something covered it (it differed by more than reveal_covered) is the static
-    # world uncovered again: "nothing moved" explains it, whatever flow smeared into it
+    # world uncovered again: "nothing moved" explains it, whatever flow smeared into it;
+    # reveal_covered is also how far a pixel must differ from the static world seen there
+    # before to look otherwise (arrivals.py; completion.FirstLook, the scene first seen)
     reveal_tolerance: float = 10.0
     reveal_covered: float = 20.0
     # ours (masks.snap_to_edges): each shown mask is trimmed back to the strongest image
