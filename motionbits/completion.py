@@ -54,8 +54,10 @@ __all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "COMP
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
-#: background's for sure.
-COMPLETION_REACH = 0.5
+#: background's for sure. 0.75 since the cut starts from the first look (round 25: a
+#: top face's mark reaches its body's sides only in a wider box; pickplace 60.5 -> 63.5,
+#: README "Completing marks by colour").
+COMPLETION_REACH = 0.75
 COMPLETION_MARGIN = 8
 COMPLETION_FRAME = 2
 #: GrabCut runs on the box scaled down to at most this many px on its longer side (its
