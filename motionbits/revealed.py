@@ -30,7 +30,7 @@ model: under a moving camera their labels are carried with it rather than with t
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 
 import cv2
 import numpy as np
@@ -102,8 +102,8 @@ def follow_ids(ids: np.ndarray, world: np.ndarray) -> np.ndarray:
 
 
 def carry_at_rest(prior: np.ndarray, valid: np.ndarray, labels: np.ndarray,
-                  world: np.ndarray, resting: Collection[int], consistent: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  world: np.ndarray, resting: Collection[int],
+                  consistent: Callable[[], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Under a moving camera, the MotionBits at rest carried with the static world's model
     instead of the flow (ours).
 
@@ -117,8 +117,9 @@ def carry_at_rest(prior: np.ndarray, valid: np.ndarray, labels: np.ndarray,
         labels: (H, W) int32 last frame's labels.
         world: (H, W, 2) float32, where each pixel's static world was at the last frame.
         resting: ids at rest at the last frame.
-        consistent: (H, W) bool, where the current frame looks like the last one carried
-            by ``world`` (the stabilised previous frame).
+        consistent: called once, only if a resting id has pixels: (H, W) bool, where the
+            current frame looks like the last one carried by ``world`` (the stabilised
+            previous frame).
 
     Returns:
         ``prior`` and ``valid`` with the resting ids' pixels taken from ``labels`` carried
@@ -136,7 +137,7 @@ def carry_at_rest(prior: np.ndarray, valid: np.ndarray, labels: np.ndarray,
     # what the flow left free or gave to another resting id
     take = new & ((prior == 0) | old)
     prior = np.where(take, followed, np.where(old, 0, prior))
-    valid = np.where(take, consistent, valid)
+    valid = np.where(take, consistent(), valid)
     return prior, valid
 
 

@@ -332,9 +332,9 @@ class MotionBitsSegmenter:
                 # the MotionBits at rest follow the static world's model, not the flow
                 prior, prior_valid = carry_at_rest(
                     prior, prior_valid, self._labels, world, self._resting,
-                    appearance_consistent(cur_g, prev_g, gradient,
-                                          tolerance=cfg.carry_tolerance,
-                                          gradient_gain=cfg.carry_gradient))
+                    lambda: appearance_consistent(cur_g, prev_g, gradient,
+                                                  tolerance=cfg.carry_tolerance,
+                                                  gradient_gain=cfg.carry_gradient))
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,

@@ -136,12 +136,18 @@ def test_carry_at_rest_follows_the_static_world_not_the_flow():
     valid = np.ones((h, w), bool)
     consistent = np.ones((h, w), bool)
     consistent[10, 17] = False  # where the image says otherwise
-    out, out_valid = carry_at_rest(prior, valid, last, world, {1}, consistent)
+    out, out_valid = carry_at_rest(prior, valid, last, world, {1}, lambda: consistent)
     expected = np.zeros((h, w), bool)
     expected[10:20, 17:27] = True
     np.testing.assert_array_equal(out == 1, expected)
     np.testing.assert_array_equal(out == 2, prior == 2)  # a moving body keeps the flow's carry
     assert not out_valid[10, 17] and out_valid[out == 1].sum() == expected.sum() - 1
     # nothing at rest: the same objects back
-    same = carry_at_rest(prior, valid, last, world, set(), consistent)
+    def never() -> np.ndarray:
+        raise AssertionError("the appearance test is not needed when nothing rests")
+
+    same = carry_at_rest(prior, valid, last, world, set(), never)
     assert same[0] is prior and same[1] is valid
+    away = np.full((h, w, 2), -100.0, np.float32)  # the resting body left the view
+    same = carry_at_rest(np.where(prior == 1, 0, prior), valid, last, away, {1}, never)
+    assert (same[0] == 1).sum() == 0
