@@ -46,6 +46,7 @@ from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
+from motionbits.resting import RestingMarks
 from motionbits.retirement import Origin, retire, retire_shadows
 from motionbits.revealed import StaticMemory, carry_at_rest
 from motionbits.setdown import SetDown
@@ -173,6 +174,7 @@ class MotionBitsSegmenter:
         self._setdown = SetDown(self.config.pixel_evidence, self.config.carry_tolerance)
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._cuts = CutMemory()  # the marks at rest completed at the last frame
+        self._rest_marks = RestingMarks()  # the marks shown at the last frame (resting.py)
         self._camera_moved = False  # the camera's motion was found at the last frame (parallax)
         self._resting: set[int] = set()  # ids at rest at the last frame
         if self._work_size is None:  # sized at the stream's first frame (_start)
@@ -441,6 +443,7 @@ class MotionBitsSegmenter:
             if world is not None:
                 self._arrivals.follow(world)
                 self._first_look.follow(world)
+                self._rest_marks.follow(world)
             labels, held, born, self._next_id = self._arrivals.place(
                 labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving),
                 moving, int(round(max(grid.cell))), self._next_id)
@@ -505,7 +508,8 @@ class MotionBitsSegmenter:
                 half_gradient=half_gradient)
             self._joined = (np.zeros(labels.shape, np.int32) if with_links is labels  # none
                             else carried_joins(with_links, labels, group_of))
-            shown = snap_to_edges(group_map(with_links, rep), cur,
+            state = group_map(with_links, rep)
+            shown = snap_to_edges(state, cur,
                                   int(round(cfg.edge_band * max(grid.cell))))
             # a mask is shown if its outline is an image edge (a mask left on a flat table
             # looks like the table around it) and, once its overhangs onto flat background
@@ -519,6 +523,10 @@ class MotionBitsSegmenter:
             # only where its outline stops inside its body)
             shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient,
                                    self._cuts, self._first_look if calm is not None else None)
+            # a mark at rest that shrank on a body and an image that did not change is
+            # shown as it was (the steps above turn on the state's frayed outline)
+            still_marks = {r for r in rep.values() if r} - {rep.get(i, 0) for i in moving}
+            shown = self._rest_marks.hold(shown, cur, state, still_marks)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
