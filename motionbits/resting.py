@@ -6,7 +6,7 @@ overhangs, hidden when small, completed by colour. On a body that stands still u
 unchanged image these steps should give the same mark at every frame; they do not. Each
 turns on the exact outline of the state's mask, which the flow frays by a pixel or two a
 frame, so the mark of a block set down flickers between whole and gone (a block completed
-to IoU 0.87 at one frame, trimmed to 0.13 at the next).
+to IoU 0.89 at one frame had its 303 px of state trimmed to 58 and hidden at the next).
 
 :class:`RestingMarks` keeps the shown label map of the last frame and the frame under it.
 The mark of a MotionBit (or shown group) at rest now takes its last frame's mark again,
@@ -18,11 +18,10 @@ where another mark has not taken those pixels, when
 - the state still holds it mostly where that mark was (``WHERE_IT_WAS`` of its pixels):
   the body has not moved, and
 - the image under that mark has not changed: at most ``CHANGED`` of its pixels differ
-  by more than
-  :data:`motionbits.completion.RECALL_LEVEL` grey levels (any channel) from every pixel
-  within ``REACH`` px of theirs in the last frame (a hand passing in front, a shadow
-  falling on it, the body lifted -- not the pixel of misalignment that a moving camera's
-  model leaves at texture).
+  by more than :data:`motionbits.completion.RECALL_LEVEL` grey levels (any channel) from
+  every pixel within ``REACH`` px of theirs in the last frame (a hand passing in front, a
+  shadow falling on it, the body lifted -- not the pixel of misalignment that a moving
+  camera's model leaves at texture).
 
 Under a moving camera the remembered map and frame follow the static world's model first
 (as the arrivals' memory does), so "unchanged" is judged where the static world now is.
@@ -54,7 +53,7 @@ REACH = 1
 
 
 class RestingMarks:
-    """The shown marks and the frame of the last frame (one stream)."""
+    """The marks shown at the last frame and the frame under them (one stream)."""
 
     def __init__(self) -> None:
         self._shown: np.ndarray | None = None  # (H, W) int32 last shown label map

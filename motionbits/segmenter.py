@@ -523,8 +523,8 @@ class MotionBitsSegmenter:
             # only where its outline stops inside its body)
             shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient,
                                    self._cuts, self._first_look if calm is not None else None)
-            # a mark at rest that shrank on a body and an image that did not change is
-            # shown as it was (the steps above turn on the state's frayed outline)
+            # a mark at rest that the steps above hid (they turn on the state's frayed
+            # outline), on a body and an image that did not change, is shown as it was
             still_marks = {r for r in rep.values() if r} - {rep.get(i, 0) for i in moving}
             shown = self._rest_marks.hold(shown, cur, state, still_marks)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
