@@ -28,6 +28,10 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   laptop lid agrees at as many frames with the hand pressing on it as with the lid's
   other pieces, but more closely with the lid's; pieces that barely move agree closely
   with anything at rest);
+- two MotionBits that agreed before but no longer touch are *apart* at a frame when both
+  have a cluster and one moves while the other stands still; at two such frames in a row
+  they are different bodies for good (a block set down and the hand that carried it,
+  which agreed while they moved as one: round 26, README "Bodies set down apart");
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final between the two; between groups it is
   outweighed when the groups agreed across at ``OUTWEIGH`` times as many frames as they
@@ -203,6 +207,7 @@ class MotionBitGroups:
         self._strikes: dict[tuple[int, int], int] = {}  # frames seen beyond ``disagree``
         self._doubt: set[tuple[int, int]] = set()  # born still beside the other's motion
         self._forbidden: set[tuple[int, int]] = set()  # disagreements nothing outweighs
+        self._apart: dict[tuple[int, int], int] = {}  # frames in a row seen apart (observe_apart)
 
     @staticmethod
     def _key(a: int, b: int) -> tuple[int, int]:
@@ -250,6 +255,28 @@ class MotionBitGroups:
         elif excess <= self.agree_tol:
             self._agree[key] = self._agree.get(key, 0) + 1
             self._excess[key] = self._excess.get(key, 0.0) + excess / max(moved, MIN_MOVED)
+
+    def observe_apart(self, touching: set[tuple[int, int]], clustered: set[int],
+                      moving: set[int]) -> None:
+        """Record this frame's evidence on the pairs seen agreeing before that no longer
+        touch (``touching``: the pairs (a, b), a < b, that do) and both have a cluster now
+        (``clustered``): one moving (``moving``) while the other stands still is a frame
+        apart, both moving or both still ends the run; at ``DISAGREE_FRAMES`` frames apart
+        in a row they are different bodies for good. One twist trajectory is one MotionBit:
+        a block set down and the hand that carried it agreed while it carried it (or once,
+        where the block's flat faces could not tell), then the hand moves on while the
+        block stands."""
+        for key in list(self._agree):
+            a, b = key
+            if key in touching or a not in clustered or b not in clustered:
+                continue
+            if (a in moving) == (b in moving):
+                self._apart.pop(key, None)
+                continue
+            self._apart[key] = self._apart.get(key, 0) + 1
+            if self._apart[key] >= DISAGREE_FRAMES:
+                del self._apart[key]
+                self.forbid(a, [b])
 
     def representatives(self, ids) -> dict[int, int]:
         """id -> the oldest (smallest) id of its group, for ``ids`` present now. Groups
@@ -318,7 +345,9 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
                      still_before: np.ndarray, carried: np.ndarray, back_points: np.ndarray,
                      reliability: np.ndarray, cur: np.ndarray, prev: np.ndarray, *,
                      disagree: float, first_moved: dict[int, int]) -> None:
-    """Record in ``groups`` this frame's evidence on every pair of touching MotionBits.
+    """Record in ``groups`` this frame's evidence on every pair of touching MotionBits,
+    and on the pairs seen agreeing before that no longer touch
+    (:meth:`MotionBitGroups.observe_apart`).
 
     A MotionBit born now out of pixels never in a MotionBit and seen standing still while
     a moving older MotionBit moved (``BORN_FRESH`` of its nodes, seen still at or after
@@ -361,7 +390,9 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
         if parents[1:].sum() and parents[1:].max() > BORN_FRESH * parents.sum():
             groups.inherit(x, int(parents[1:].argmax()) + 1)
     boxes = cache(lambda: label_boxes(labels))  # once, if a pair asks
-    for a, b in touching_pairs(labels, reach=reach):
+    touching = touching_pairs(labels, reach=reach)
+    groups.observe_apart(touching, set(own), moving)
+    for a, b in touching:
         if groups.known(a, b):
             continue
         for x, y in ((a, b), (b, a)):

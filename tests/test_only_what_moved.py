@@ -91,6 +91,28 @@ def test_groups_agree_disagree_and_oldest_id():
     assert rep[3] != rep[8]
 
 
+def test_a_body_set_down_leaves_the_group_of_the_hand_that_carried_it():
+    """The hand 2 and the block 5 it carried agreed at four frames; the hand lets go and
+    moves on, no longer touching the block, which stands still. After DISAGREE_FRAMES
+    such frames in a row they are two groups for good; a frame at which both move (or
+    they touch) ends the run; pieces still touching are left to the touching test."""
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    for _ in range(4):
+        groups.observe(2, 5, 0.3, moved=4.0)
+    assert groups.representatives([2, 5]) == {2: 2, 5: 2}
+    groups.observe_apart(set(), {2, 5}, {2})  # the hand moves, the block stands
+    groups.observe_apart(set(), {2, 5}, {2, 5})  # both moved: the run ends
+    groups.observe_apart(set(), {2, 5}, {2})
+    assert groups.representatives([2, 5]) == {2: 2, 5: 2}
+    groups.observe_apart({(2, 5)}, {2, 5}, {2})  # touching: not this test's
+    groups.observe_apart(set(), {2}, {2})  # the block without a cluster: nothing seen
+    assert groups.representatives([2, 5]) == {2: 2, 5: 2}
+    groups.observe_apart(set(), {2, 5}, {2})  # the second frame in a row apart
+    assert groups.representatives([2, 5]) == {2: 2, 5: 5}
+    groups.observe(2, 5, 0.1, moved=4.0)  # for good
+    assert groups.representatives([2, 5]) == {2: 2, 5: 5}
+
+
 def test_a_piece_joins_the_group_it_agreed_with_most_often():
     """MotionBit 4 agreed once with 2 (a hand) and at three frames with 3 (the rest of
     the door the hand pushes); 2 and 3 disagree: 4 goes with 3, not with the older 2."""
