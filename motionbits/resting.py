@@ -36,7 +36,7 @@ from collections.abc import Collection
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_boxes
+from motionbits.boxes import label_areas, label_boxes
 from motionbits.completion import RECALL_LEVEL
 from motionbits.revealed import follow_ids, follow_look
 
@@ -84,16 +84,17 @@ class RestingMarks:
         out = shown
         if self._shown is not None and self._shown.shape == shown.shape:
             before = self._shown
-            shown_now = np.bincount(shown.ravel(), minlength=before.max(initial=0) + 1) > 0
-            for i, box in enumerate(label_boxes(before)):
-                label = i + 1
-                if box is None or label not in resting or shown_now[label]:
-                    continue
+            was_shown, now_shown = label_areas(before), label_areas(shown)
+            hidden = sorted(i for i in resting if i < was_shown.size and was_shown[i]
+                            and (i >= now_shown.size or not now_shown[i]))
+            boxes = label_boxes(before) if hidden else []
+            in_state = label_areas(state) if hidden else None
+            for label in hidden:
+                box = boxes[label - 1]
                 was = before[box] == label
-                size = np.count_nonzero(was)
-                body = state == label
-                held_there = np.count_nonzero(body[box] & was)
-                if held_there == 0 or held_there < WHERE_IT_WAS * np.count_nonzero(body):
+                size = was_shown[label]
+                held_there = np.count_nonzero((state[box] == label) & was)
+                if held_there == 0 or held_there < WHERE_IT_WAS * in_state[label]:
                     continue
                 change = _change(rgb[box], self._rgb[box])[was]
                 if np.count_nonzero(change > RECALL_LEVEL) > CHANGED * size:
