@@ -50,6 +50,7 @@ from motionbits.resting import RestingMarks
 from motionbits.retirement import Origin, retire, retire_shadows
 from motionbits.revealed import StaticMemory, carry_at_rest
 from motionbits.setdown import SetDown
+from motionbits.shadows import cast_shadows, trim_shadows
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
@@ -486,6 +487,7 @@ class MotionBitsSegmenter:
             self._resting = set(present.tolist()) - moving
             standing = standing_still(speed, reliable, cfg.move_threshold)
             self._still = seen_still(still_seen, standing, self.frame_index)
+            shadows = cast_shadows(self._memory, cur, labels)  # before the memory moves on
             calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
             if calm is not None:
                 self._arrivals.update(cur, calm, labels)
@@ -523,6 +525,8 @@ class MotionBitsSegmenter:
             # only where its outline stops inside its body)
             shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient,
                                    self._cuts, self._first_look if calm is not None else None)
+            # without the static world under a cast shadow (which moves with its body)
+            shown = trim_shadows(shown, shadows)
             # a mark at rest that the steps above hid (they turn on the state's frayed
             # outline), on a body and an image that did not change, is shown as it was
             still_marks = {r for r in rep.values() if r} - {rep.get(i, 0) for i in moving}

@@ -12,6 +12,7 @@ from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import hide_edgeless, snap_to_edges, trim_flat_background
 from motionbits.retirement import OLD_SHADOW_SHARE, SHADOW_AGE, SHADOW_SHARE, retire_shadows
 from motionbits.revealed import StaticMemory
+from motionbits.shadows import BODY_SHARE, cast_shadows, trim_shadows
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
 SIZE = (240, 320)
@@ -191,6 +192,47 @@ def test_young_moving_cast_shadows_are_retired_bodies_and_others_kept():
     assert SHADOW_SHARE < share < OLD_SHADOW_SHARE
     assert retire_shadows(half, cur, memory, {1}, old, 1 + SHADOW_AGE).max() == 0
     assert retire_shadows(half, cur, memory, {1}, old, 2 + SHADOW_AGE) is half
+
+
+def _marks_on_shadow_and_body() -> np.ndarray:
+    """Mark 1: the body of :func:`_shadow_and_body` and a square of the shadow beside it;
+    mark 2: a strip inside the shadow only."""
+    labels = np.zeros(SIZE, np.int32)
+    labels[100:160, 200:280] = 1
+    labels[100:140, 90:130] = 1
+    labels[142:152, 85:115] = 2
+    return labels
+
+
+def test_marks_shown_leave_out_the_cast_shadow_beside_their_body():
+    memory, cur = _observing_shadow_and_body()
+    labels = _marks_on_shadow_and_body()
+    shadows = cast_shadows(memory, cur, labels)
+    out = trim_shadows(labels, shadows)
+    assert (labels[labels == 1].size - 4800) / labels[labels == 1].size < BODY_SHARE
+    assert (out[100:160, 200:280] == 1).all()  # the body keeps its mark
+    assert (out[105:135, 95:125] == 0).all()  # its shadow does not
+    assert not (out == 2).any()  # a mark on the shadow only is not shown
+    # nothing labelled: nothing to look at
+    assert cast_shadows(memory, cur, np.zeros(SIZE, np.int32)) is None
+    assert trim_shadows(labels, None) is labels
+
+
+def test_on_a_flat_table_a_dimmed_look_is_not_trimmed():
+    """On a flat table a body's flat face of the table's hue, darker, would pass for a
+    shadow: without texture under it, the marks stay as they are."""
+    base = np.empty((*SIZE, 3), np.uint8)
+    base[:] = (150, 120, 90)
+    memory = _remembered(base)
+    cur = _shadow_and_body(base)
+    gray = _gray(cur)
+    memory.observe(cur, gray, np.abs(gray - _gray(base)))
+    labels = _marks_on_shadow_and_body()
+    core = np.zeros(SIZE, bool)
+    core[105:135, 95:125] = True
+    assert memory.shadowed(cur, (slice(0, SIZE[0]), slice(0, SIZE[1])))[core].mean() > 0.95
+    np.testing.assert_array_equal(trim_shadows(labels, cast_shadows(memory, cur, labels)),
+                                  labels)
 
 
 def test_a_moving_shadow_leaves_no_mark_of_its_own(monkeypatch):

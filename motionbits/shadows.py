@@ -1,0 +1,92 @@
+"""Marks without cast shadows: the static world, dimmed, is not part of a body (ours).
+
+A body carried or pushed over a table casts a shadow that moves with it, and the flow
+moves the shadow's edges as the body's: the clustering gives the shadow the body's
+MotionBit, and the mark shown covers the body and the table beside it (a block set down on
+wood grain: 2575 px of block, 2640 px of mark). What lies under a cast shadow is the
+static world as :class:`motionbits.revealed.StaticMemory` remembers it, darker, with its
+colour and its texture (:meth:`StaticMemory.shadowed`). The masks shown leave such pixels
+out:
+
+- only where the remembered world has texture (mean gradient above ``TEXTURE`` grey
+  levels per px): on a flat table a flat face of a body in the table's hue, darker, passes
+  for a shadow, and nothing tells the two apart;
+- only pieces of shadow (an opening by ``OPEN`` px keeps them), so that single pixels of a
+  body that happen to match do not fray its mark;
+- a mark of which at most ``BODY_SHARE`` is shadow loses those pixels; a mark mostly
+  shadow is not shown at all (the agent's shadow, left on the table as a mark at rest).
+
+The state keeps the motion's masks; only the masks shown change (README, "Cast shadows",
+round 27).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motionbits.boxes import label_areas, nonzero_box
+from motionbits.evidence import gradient_magnitude
+from motionbits.revealed import StaticMemory
+
+__all__ = ["cast_shadows", "trim_shadows", "TEXTURE", "OPEN", "BODY_SHARE"]
+
+#: Grey levels per px: the remembered world's mean gradient (5x5, then 7x7 mean) above which
+#: a dimmed look of it is told from a body's flat face (flat tables read 0.2-0.3, wood grain
+#: and marble 2-6 under the shadows of the pick-and-place track).
+TEXTURE = 1.0
+#: px: pieces of shadow kept by an opening with a square of this side (at the working size).
+OPEN = 5
+#: A mark loses its shadow pixels when they are at most this share of it; beyond, it is a
+#: shadow and is not shown.
+BODY_SHARE = 0.5
+
+
+def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray
+                 ) -> tuple[tuple[slice, slice], np.ndarray] | None:
+    """Where the labelled part of the frame shows the remembered static world under a cast
+    shadow, on texture (module docstring). Call between the memory's ``observe`` and
+    ``update``.
+
+    Args:
+        memory: the static world's look.
+        cur: (H, W, 3) uint8 current RGB frame.
+        labels: (H, W) int label map of this frame.
+
+    Returns:
+        (the box of the labels, (h, w) bool on it), or None when nothing is labelled or
+        the memory is off.
+    """
+    box = nonzero_box(labels)
+    if box[0].stop == box[0].start:
+        return None
+    shadow = memory.shadowed(cur, box)
+    if shadow is None:
+        return None
+    texture = cv2.blur(gradient_magnitude(memory.gray[box]), (7, 7))
+    return box, shadow & (texture > TEXTURE)
+
+
+def trim_shadows(shown: np.ndarray, shadows: tuple[tuple[slice, slice], np.ndarray] | None
+                 ) -> np.ndarray:
+    """``shown`` (H, W) int32 marks without their pieces of cast shadow, and without the
+    marks that are mostly shadow (module docstring); ``shadows`` from
+    :func:`cast_shadows` (None: ``shown`` itself)."""
+    if shadows is None:
+        return shown
+    box, shadow = shadows
+    sub = shown[box]
+    on = shadow & (sub > 0)
+    if not on.any():
+        return shown
+    on = cv2.morphologyEx(on.view(np.uint8), cv2.MORPH_OPEN, np.ones((OPEN, OPEN), np.uint8)) > 0
+    area = label_areas(sub)
+    dark = np.bincount(sub[on], minlength=area.size)
+    gone = dark > BODY_SHARE * area
+    cut = (dark > 0) & ~gone
+    cut[0] = gone[0] = False
+    if not (cut.any() or gone.any()):
+        return shown
+    out = shown.copy()
+    out[box][(on & cut[sub]) | gone[sub]] = 0
+    return out
