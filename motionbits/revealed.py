@@ -141,6 +141,24 @@ def carry_at_rest(prior: np.ndarray, valid: np.ndarray, labels: np.ndarray,
     return prior, valid
 
 
+def dimmed(cur: np.ndarray, then: np.ndarray, known: np.ndarray, box: tuple[slice, slice],
+           tolerance: float) -> np.ndarray:
+    """(h, w) bool on the image box ``box``: where (H, W, 3) uint8 ``cur`` shows ``then``
+    (known where ``known``) under a shadow (:meth:`StaticMemory.shadowed`)."""
+    # grown by the windows' reach, so that the answer is the whole image's, cropped
+    grown = grow_box(box, SHADOW_WINDOW // 2 + WINDOW // 2, known.shape)
+    y0, x0 = grown[0].start, grown[1].start
+    inner = (slice(box[0].start - y0, box[0].stop - y0),
+             slice(box[1].start - x0, box[1].stop - x0))
+    chroma, gain, sum_now, sum_then = light_change(cur[grown], then[grown])
+    # the texture under a shadow is the remembered one, dimmed by a smooth gain
+    local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
+    relit = cv2.blur(np.abs(sum_now - local * sum_then), (WINDOW, WINDOW)) / 3
+    shadow = ((sum_then > SHADOW_MIN_SUM) & (chroma < SHADOW_CHROMA)
+              & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < tolerance))
+    return known[box] & shadow[inner]
+
+
 class StaticMemory:
     """Per-pixel look of the static world where it was last seen still.
 
@@ -237,18 +255,7 @@ class StaticMemory:
         """
         if self._difference is None:
             return None
-        # grown by the windows' reach, so that the answer is the whole image's, cropped
-        grown = grow_box(box, SHADOW_WINDOW // 2 + WINDOW // 2, self.known.shape)
-        y0, x0 = grown[0].start, grown[1].start
-        inner = (slice(box[0].start - y0, box[0].stop - y0),
-                 slice(box[1].start - x0, box[1].stop - x0))
-        chroma, gain, sum_now, sum_then = light_change(cur[grown], self.color[grown])
-        # the texture under a shadow is the remembered one, dimmed by a smooth gain
-        local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
-        relit = cv2.blur(np.abs(sum_now - local * sum_then), (WINDOW, WINDOW)) / 3
-        shadow = ((sum_then > SHADOW_MIN_SUM) & (chroma < SHADOW_CHROMA)
-                  & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < self.tolerance))
-        return self.known[box] & shadow[inner]
+        return dimmed(cur, self.color, self.known, box, self.tolerance)
 
     def dimmed_share(self, cur: np.ndarray, labels: np.ndarray, lab: int,
                      box: tuple[slice, slice]) -> float:

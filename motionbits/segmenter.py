@@ -487,7 +487,8 @@ class MotionBitsSegmenter:
             self._resting = set(present.tolist()) - moving
             standing = standing_still(speed, reliable, cfg.move_threshold)
             self._still = seen_still(still_seen, standing, self.frame_index)
-            shadows = cast_shadows(self._memory, cur, labels)  # before the memory moves on
+            # before the memory moves on
+            shadows = cast_shadows(self._memory, cur, labels, self._first_look)
             calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
             if calm is not None:
                 self._arrivals.update(cur, calm, labels)

@@ -3,10 +3,11 @@
 A body carried or pushed over a table casts a shadow that moves with it, and the flow
 moves the shadow's edges as the body's: the clustering gives the shadow the body's
 MotionBit, and the mark shown covers the body and the table beside it (a block set down on
-wood grain: 2575 px of block, 2640 px of mark). What lies under a cast shadow is the
+wood grain: 2575 px of block, a mark of 5200 px). What lies under a cast shadow is the
 static world as :class:`motionbits.revealed.StaticMemory` remembers it, darker, with its
-colour and its texture (:meth:`StaticMemory.shadowed`). The masks shown leave such pixels
-out:
+colour and its texture (:meth:`StaticMemory.shadowed`) -- or, where a shadow stood still
+long enough for that memory to take it in, the scene as first seen
+(:class:`motionbits.completion.FirstLook`), dimmed. The masks shown leave such pixels out:
 
 - only where the remembered world has texture (mean gradient above ``TEXTURE`` grey
   levels per px): on a flat table a flat face of a body in the table's hue, darker, passes
@@ -27,7 +28,8 @@ import numpy as np
 
 from motionbits.boxes import label_areas, nonzero_box
 from motionbits.evidence import gradient_magnitude
-from motionbits.revealed import StaticMemory
+from motionbits.completion import FirstLook
+from motionbits.revealed import StaticMemory, dimmed
 
 __all__ = ["cast_shadows", "trim_shadows", "TEXTURE", "OPEN", "BODY_SHARE"]
 
@@ -42,16 +44,19 @@ OPEN = 5
 BODY_SHARE = 0.5
 
 
-def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray
+def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray,
+                 first: FirstLook | None = None
                  ) -> tuple[tuple[slice, slice], np.ndarray] | None:
     """Where the labelled part of the frame shows the remembered static world under a cast
     shadow, on texture (module docstring). Call between the memory's ``observe`` and
     ``update``.
 
     Args:
-        memory: the static world's look.
+        memory: the static world's look where it was last seen still.
         cur: (H, W, 3) uint8 current RGB frame.
         labels: (H, W) int label map of this frame.
+        first: the scene's look where first seen still, or None: a shadow that stood
+            still for a while is in ``memory``'s look, not in the first one.
 
     Returns:
         (the box of the labels, (h, w) bool on it), or None when nothing is labelled or
@@ -63,6 +68,8 @@ def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray
     shadow = memory.shadowed(cur, box)
     if shadow is None:
         return None
+    if first is not None:
+        shadow |= dimmed(cur, first.look, first.known, box, memory.tolerance)
     texture = cv2.blur(gradient_magnitude(memory.gray[box]), (7, 7))
     return box, shadow & (texture > TEXTURE)
 

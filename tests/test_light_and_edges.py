@@ -7,6 +7,7 @@ import pytest
 from scipy import ndimage
 
 from motionbits import MotionBitsConfig, segment_video
+from motionbits.completion import FirstLook
 from motionbits.evidence import gradient_magnitude, static_residual
 from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import hide_edgeless, snap_to_edges, trim_flat_background
@@ -216,6 +217,25 @@ def test_marks_shown_leave_out_the_cast_shadow_beside_their_body():
     # nothing labelled: nothing to look at
     assert cast_shadows(memory, cur, np.zeros(SIZE, np.int32)) is None
     assert trim_shadows(labels, None) is labels
+
+
+def test_a_shadow_that_stood_still_is_told_by_the_scene_first_seen():
+    """A shadow that stood still long enough is in the memory's look; the scene as first
+    seen (``FirstLook``) still shows the table lit there."""
+    base = _texture(0)
+    cur = _shadow_and_body(base)
+    shaded = np.clip(base * _shadow((100, 120), 40, 0.5, soft=2)[..., None], 0, 255)
+    memory = _remembered(shaded.astype(np.uint8))  # learnt the shadow
+    gray = _gray(cur)
+    memory.observe(cur, gray, np.zeros(SIZE, np.float32))
+    first = FirstLook(SIZE, covered=20.0)
+    first.update(base, np.ones(SIZE, bool), np.zeros(SIZE, np.int32))
+    labels = _marks_on_shadow_and_body()
+    assert trim_shadows(labels, cast_shadows(memory, cur, labels)) is labels
+    out = trim_shadows(labels, cast_shadows(memory, cur, labels, first))
+    assert (out[100:160, 200:280] == 1).all()
+    assert (out[105:135, 95:125] == 0).all()
+    assert not (out == 2).any()
 
 
 def test_on_a_flat_table_a_dimmed_look_is_not_trimmed():
