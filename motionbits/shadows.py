@@ -14,8 +14,11 @@ long enough for that memory to take it in, the scene as first seen
   for a shadow, and nothing tells the two apart;
 - only pieces of shadow (an opening by ``OPEN`` px keeps them), so that single pixels of a
   body that happen to match do not fray its mark;
-- a mark of which at most ``BODY_SHARE`` is shadow loses those pixels; a mark mostly
-  shadow is not shown at all (the agent's shadow, left on the table as a mark at rest).
+- a mark of which at most ``BODY_SHARE`` is shadow loses those pixels, but not where
+  they would leave a hole inside it (a cast shadow lies beside its body; a pale face of a
+  body that stood there before it moved looks like the scene first seen there, darker);
+  a mark mostly shadow is not shown at all (the agent's shadow, left on the table as a
+  mark at rest).
 
 The state keeps the motion's masks; only the masks shown change (README, "Cast shadows",
 round 27).
@@ -28,6 +31,7 @@ import numpy as np
 
 from motionbits.boxes import label_areas, nonzero_box
 from motionbits.evidence import gradient_magnitude
+from motionbits.masks import fill_holes
 from motionbits.completion import FirstLook
 from motionbits.revealed import StaticMemory, dimmed
 
@@ -95,5 +99,11 @@ def trim_shadows(shown: np.ndarray, shadows: tuple[tuple[slice, slice], np.ndarr
     if not (cut.any() or gone.any()):
         return shown
     out = shown.copy()
-    out[box][(on & cut[sub]) | gone[sub]] = 0
+    trimmed = on & cut[sub]
+    kept = np.where(trimmed, 0, sub)
+    # a hole it would leave inside a mark is not a cast shadow: a face of the body that
+    # looks like the scene first seen there, darker (it stood there before it moved)
+    filled = fill_holes(kept)
+    out[box] = np.where(trimmed & (filled > 0), filled, kept)
+    out[box][gone[sub]] = 0
     return out

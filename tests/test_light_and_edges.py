@@ -219,6 +219,15 @@ def test_marks_shown_leave_out_the_cast_shadow_beside_their_body():
     assert trim_shadows(labels, None) is labels
 
 
+def test_a_shadow_inside_a_mark_leaves_no_hole():
+    """A cast shadow lies beside its body: shadowed pixels the mark encloses stay in it."""
+    memory, cur = _observing_shadow_and_body()
+    labels = np.zeros(SIZE, np.int32)
+    labels[70:170, 50:300] = 1  # the whole shadow inside one mark, with the body
+    out = trim_shadows(labels, cast_shadows(memory, cur, labels))
+    np.testing.assert_array_equal(out, labels)
+
+
 def test_a_shadow_that_stood_still_is_told_by_the_scene_first_seen():
     """A shadow that stood still long enough is in the memory's look; the scene as first
     seen (``FirstLook``) still shows the table lit there."""
