@@ -30,9 +30,9 @@ import cv2
 import numpy as np
 
 from motionbits.boxes import label_areas, nonzero_box
-from motionbits.evidence import gradient_magnitude
-from motionbits.masks import fill_holes
 from motionbits.completion import FirstLook
+from motionbits.evidence import gradient_magnitude
+from motionbits.masks import drop_labels, fill_holes
 from motionbits.revealed import StaticMemory, dimmed
 
 __all__ = ["cast_shadows", "trim_shadows", "TEXTURE", "OPEN", "BODY_SHARE"]
@@ -91,7 +91,7 @@ def trim_shadows(shown: np.ndarray, shadows: tuple[tuple[slice, slice], np.ndarr
     if not on.any():
         return shown
     on = cv2.morphologyEx(on.view(np.uint8), cv2.MORPH_OPEN, np.ones((OPEN, OPEN), np.uint8)) > 0
-    area = label_areas(sub)
+    area = label_areas(shown)  # whole marks (completion may have grown one out of the box)
     dark = np.bincount(sub[on], minlength=area.size)
     gone = dark > BODY_SHARE * area
     cut = (dark > 0) & ~gone
@@ -105,5 +105,4 @@ def trim_shadows(shown: np.ndarray, shadows: tuple[tuple[slice, slice], np.ndarr
     # looks like the scene first seen there, darker (it stood there before it moved)
     filled = fill_holes(kept)
     out[box] = np.where(trimmed & (filled > 0), filled, kept)
-    out[box][gone[sub]] = 0
-    return out
+    return drop_labels(out, np.flatnonzero(gone))
