@@ -29,7 +29,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_areas, nonzero_box
+from motionbits.boxes import label_areas, nonzero_box, run_counts
 from motionbits.completion import FirstLook
 from motionbits.evidence import gradient_magnitude
 from motionbits.masks import drop_labels, fill_holes
@@ -92,7 +92,7 @@ def trim_shadows(shown: np.ndarray, shadows: tuple[tuple[slice, slice], np.ndarr
         return shown
     on = cv2.morphologyEx(on.view(np.uint8), cv2.MORPH_OPEN, np.ones((OPEN, OPEN), np.uint8)) > 0
     area = label_areas(shown)  # whole marks (completion may have grown one out of the box)
-    dark = np.bincount(sub[on], minlength=area.size)
+    dark = run_counts(sub[on], area.size)  # shadow px per mark
     gone = dark > BODY_SHARE * area
     cut = (dark > 0) & ~gone
     cut[0] = gone[0] = False
