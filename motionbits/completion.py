@@ -58,6 +58,9 @@ __all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "COMP
 #: top face's mark reaches its body's sides only in a wider box; pickplace 60.5 -> 63.5,
 #: README "Completing marks by colour").
 COMPLETION_REACH = 0.75
+#: A cut that runs out to its box's frame is tried again in a box grown this many times
+#: as far (the mark of a block's top face, seen from above at an angle, is a third of it).
+WIDER = 2.0
 COMPLETION_MARGIN = 8
 COMPLETION_FRAME = 2
 #: GrabCut runs on the box scaled down to at most this many px on its longer side (its
@@ -156,16 +159,34 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
     """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
     around it, where no mask of ``out`` is yet -- starting on the body's side, with the
     mask, from what looks otherwise than ``first_look`` saw there; None where it finds
-    none."""
+    none. A cut that runs out to its box's frame is tried once more in a box
+    ``WIDER`` times as far out: a top face's mark may be a small part of its body."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
-    reach = int(COMPLETION_REACH * side) + COMPLETION_MARGIN
-    rows, cols = grow_box(box, reach, label_map.shape)
+    for share in (COMPLETION_REACH, WIDER * COMPLETION_REACH):
+        cut = _cut_within(label_map, label, grow_box(
+            box, int(share * side) + COMPLETION_MARGIN, label_map.shape), rgb, out, first_look)
+        if cut is not _RAN_OUT:
+            return cut
+    return None
+
+
+#: :func:`_cut_within`'s answer where the cut ran out to its box's frame.
+_RAN_OUT = object()
+
+
+def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
+                rgb: np.ndarray, out: np.ndarray, first_look: FirstLook | None
+                ) -> _Cut | None | object:
+    """:func:`_cut` in the box ``around``: the cut, None where it finds none, or
+    ``_RAN_OUT`` where it runs out to the box's frame."""
+    rows, cols = around
     mask = label_map[rows, cols] == label
     trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
     f = COMPLETION_FRAME
     trimap[f:-f, f:-f] = cv2.GC_PR_BGD
-    if first_look is not None:
-        trimap[first_look.changed(rgb, (rows, cols)) & (trimap == cv2.GC_PR_BGD)] = cv2.GC_PR_FGD
+    if first_look is not None:  # (another mark's pixels are not this body's)
+        trimap[first_look.changed(rgb, (rows, cols)) & (trimap == cv2.GC_PR_BGD)
+               & (out[rows, cols] == 0)] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
@@ -180,9 +201,12 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
     new = joined[pieces] & free
     if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
         new &= ~_shadowed(rgb[rows, cols], free & ~new)
-    # a cut that runs out to its box's frame found no body's rest (a plain table)
-    if not new.any() or _reaches_frame(new):
+    if not new.any():
         return None
+    # a cut that runs out to its box's frame found no body's rest (a plain table) --
+    # or the box was too small for it
+    if _reaches_frame(new):
+        return _RAN_OUT
     return _Cut(rows, cols, mask, rgb[rows, cols].copy(), mask | new)
 
 

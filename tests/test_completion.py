@@ -100,13 +100,16 @@ def test_the_table_under_a_shadow_is_told_from_a_dark_body():
 def test_a_cut_that_runs_out_of_its_box_is_not_taken():
     """A mark that spilled onto a plain white table (as a mark on a real clip's cup did):
     the table's colour runs on past the box the cut works in, so the cut would take the
-    table as far as the box goes -- no body's rest, and the mark is left as it is."""
+    table as far as the box goes -- no body's rest: no pixel of the table is taken, in
+    the cut's box or in the wider one it then tries."""
     rgb = _table()
     rgb[120:] = (235, 235, 235)  # a plain white table over the lower half
     rgb[90:125, 150:175] = (200, 40, 40)  # a red cup at its edge
     labels = np.zeros((240, 320), np.int32)
     labels[110:170, 120:200] = 4  # the cup's foot and 50 rows of the table
-    assert complete_masks(labels, rgb) is labels
+    out = complete_masks(labels, rgb)
+    assert not ((out == 4) & (labels == 0))[120:].any()
+    assert (out[labels == 4] == 4).all()
 
 
 def test_a_cut_found_for_a_mark_at_rest_is_used_again_until_the_image_changes(monkeypatch):
@@ -184,3 +187,48 @@ def test_the_scene_first_seen_is_kept_where_it_was_first_seen():
     first.update(np.full((4, 4, 3), 200, np.uint8), np.ones((4, 4), bool), labels)
     assert (first.look[1:, :2] == 10).all() and (first.look[:, 2:] == 200).all()
     assert not first.known[0, 0] and first.known.sum() == 15
+
+
+def test_a_top_face_mark_reaches_its_body_s_side_beyond_its_box(monkeypatch):
+    """A mark on a block's top face (where the flow read its motion) is a small part of the
+    block seen from above at an angle: its darker side runs on past the box the cut works
+    in, so that cut runs out of its box. It is tried once more in a box twice as far out,
+    where the side ends inside the box: the block is marked whole, and none of the
+    table. With the second box no wider than the first, the mark stays as it was."""
+    import motionbits.completion as completion
+
+    table = _table(4)
+    rgb = table.copy()
+    body = np.zeros((240, 320), bool)
+    body[60:118, 140:170] = True
+    rgb[60:72, 140:170] = (200, 40, 40)  # the lit top face
+    rgb[72:118, 140:170] = (110, 20, 20)  # the side in shade
+    labels = np.zeros((240, 320), np.int32)
+    labels[60:72, 140:170] = 6
+    first_look = FirstLook((240, 320), covered=20.0)
+    first_look.update(table, np.ones((240, 320), bool), np.zeros((240, 320), np.int32))
+    out = complete_masks(labels, rgb, first_look=first_look)
+    assert (out[body] == 6).mean() > 0.95
+    assert (out[~body] == 0).mean() > 0.995
+    monkeypatch.setattr(completion, "WIDER", 1.0)
+    assert complete_masks(labels, rgb, first_look=first_look) is labels
+
+
+def test_another_mark_s_pixels_do_not_seed_the_body_s_colours():
+    """Pixels of other marks that look otherwise than first seen (the hand beside a block)
+    are not taken as the block's colours: a patch of the table of the hand's colour,
+    below the block, stays the table's (it was all taken when they were)."""
+    table = _table(5)
+    rgb = table.copy()
+    rgb[100:140, 100:140] = (200, 40, 40)  # a red block, its mark the lower half
+    rgb[100:140, 142:180] = (230, 200, 60)  # a yellow hand beside it (another mark)
+    rgb[140:165, 100:140] = (230, 200, 60)  # a yellow patch of the table below the block,
+    table[140:165, 100:140] = (230, 200, 60)  # first seen so
+    labels = np.zeros((240, 320), np.int32)
+    labels[120:140, 100:140] = 2
+    labels[100:140, 142:180] = 1
+    first_look = FirstLook((240, 320), covered=20.0)
+    first_look.update(table, np.ones((240, 320), bool), np.zeros((240, 320), np.int32))
+    out = complete_masks(labels, rgb, first_look=first_look)
+    assert (out[100:140, 100:140] == 2).mean() > 0.95
+    assert (out[140:165, 100:140] == 2).mean() < 0.1  # (its edge row: the cut's 96 px)
