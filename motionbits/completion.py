@@ -7,7 +7,9 @@ whole (it reaches no image border: not an arm or hand that enters the frame), is
 OpenCV's GrabCut (colour models of the mask and of its surroundings, cut along the image's
 edges) within a box around it: the pixels the cut gives to the body, joined to the mask
 and not another mask's, are the body's too -- unless they run out to the box's frame
-(a mark spilled onto a plain table would take the table as far as the box goes). This
+(a mark spilled onto a plain table would take the table as far as the box goes; the cut
+is then tried once more in a box twice as far out, for a mark on a small part of its
+body, such as a block's top face whose sides run past the first box). This
 is the last step on the shown masks (after specks and small marks are hidden: a speck
 grown by its colours would be shown); the segmenter's state keeps the motion's masks.
 
@@ -21,11 +23,12 @@ edges.
 
 Within a stream, the cut also knows what the scene looked like before (:class:`FirstLook`,
 each pixel as first seen standing still and unlabelled): pixels within the box that now
-look otherwise, other than by a cast shadow, start on the body's side of the cut. A
-body's faces that its motion did not mark (a cylinder's dark side under its textured
-top) differ from the table first seen there, so its colours enter the body's model
-instead of the background's; pixels that still look as first seen stay on the
-background's side unless their colours say otherwise (the body's top may be the
+look otherwise, other than by a cast shadow, start on the body's side of the cut --
+unless another mask holds them (another body, or the hand beside it: its colours are
+not the body's). A body's faces that its motion did not mark (a cylinder's dark side
+under its textured top) differ from the table first seen there, so its colours enter
+the body's model instead of the background's; pixels that still look as first seen stay
+on the background's side unless their colours say otherwise (the body's top may be the
 table's colour).
 
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
