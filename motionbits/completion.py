@@ -52,8 +52,8 @@ from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
                                  follow_known, follow_look, light_change)
 
-__all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "COMPLETION_SIDE",
-           "OPEN_OUTLINE_SHARE"]
+__all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "WIDER",
+           "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
@@ -166,22 +166,18 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
     ``WIDER`` times as far out: a top face's mark may be a small part of its body."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
     for share in (COMPLETION_REACH, WIDER * COMPLETION_REACH):
-        cut = _cut_within(label_map, label, grow_box(
+        cut, ran_out = _cut_within(label_map, label, grow_box(
             box, int(share * side) + COMPLETION_MARGIN, label_map.shape), rgb, out, first_look)
-        if cut is not _RAN_OUT:
+        if not ran_out:
             return cut
     return None
 
 
-#: :func:`_cut_within`'s answer where the cut ran out to its box's frame.
-_RAN_OUT = object()
-
-
 def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
                 rgb: np.ndarray, out: np.ndarray, first_look: FirstLook | None
-                ) -> _Cut | None | object:
-    """:func:`_cut` in the box ``around``: the cut, None where it finds none, or
-    ``_RAN_OUT`` where it runs out to the box's frame."""
+                ) -> tuple[_Cut | None, bool]:
+    """:func:`_cut` in the image box ``around``: (the cut or None, whether it ran out to
+    the box's frame)."""
     rows, cols = around
     mask = label_map[rows, cols] == label
     trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
@@ -193,7 +189,7 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     trimap[mask] = cv2.GC_PR_FGD
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
-        return None
+        return None, False
     # the pieces of the cut that hold mask pixels, where no mask is yet
     free = out[rows, cols] == 0
     n, pieces = cv2.connectedComponents((body & (free | mask)).view(np.uint8),
@@ -205,12 +201,12 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
         new &= ~_shadowed(rgb[rows, cols], free & ~new)
     if not new.any():
-        return None
+        return None, False
     # a cut that runs out to its box's frame found no body's rest (a plain table) --
     # or the box was too small for it
     if _reaches_frame(new):
-        return _RAN_OUT
-    return _Cut(rows, cols, mask, rgb[rows, cols].copy(), mask | new)
+        return None, True
+    return _Cut(rows, cols, mask, rgb[rows, cols].copy(), mask | new), False
 
 
 class CutMemory:
