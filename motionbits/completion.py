@@ -180,18 +180,18 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     the box's frame)."""
     rows, cols = around
     mask = label_map[rows, cols] == label
+    free = out[rows, cols] == 0  # where no mask is yet
     trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
     f = COMPLETION_FRAME
     trimap[f:-f, f:-f] = cv2.GC_PR_BGD
     if first_look is not None:  # (another mark's pixels are not this body's)
         trimap[first_look.changed(rgb, (rows, cols)) & (trimap == cv2.GC_PR_BGD)
-               & (out[rows, cols] == 0)] = cv2.GC_PR_FGD
+               & free] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
         return None, False
     # the pieces of the cut that hold mask pixels, where no mask is yet
-    free = out[rows, cols] == 0
     n, pieces = cv2.connectedComponents((body & (free | mask)).view(np.uint8),
                                         connectivity=8)
     joined = np.zeros(n, bool)

@@ -524,13 +524,14 @@ class MotionBitsSegmenter:
             shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
             # and each mark seen whole takes the rest of its body by colour (a moving one
             # only where its outline stops inside its body)
-            shown = complete_masks(shown, cur, {rep.get(i, 0) for i in moving}, gradient,
+            moving_marks = {rep[i] for i in moving if rep.get(i)}  # shown labels moving now
+            shown = complete_masks(shown, cur, moving_marks, gradient,
                                    self._cuts, self._first_look if calm is not None else None)
             # without the static world under a cast shadow (which moves with its body)
             shown = trim_shadows(shown, shadows)
             # a mark at rest that the steps above hid (they turn on the state's frayed
             # outline), on a body and an image that did not change, is shown as it was
-            still_marks = {r for r in rep.values() if r} - {rep.get(i, 0) for i in moving}
+            still_marks = {r for r in rep.values() if r} - moving_marks
             shown = self._rest_marks.hold(shown, cur, state, still_marks)
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
