@@ -40,6 +40,9 @@ __all__ = ["dominant_homography", "compensate_flow", "world_maps", "stabilize_pr
 #: A node's flow is trusted for the camera fit above this forward-backward reliability
 #: (``exp(-(err / fb_sigma)^2)``: 0.5 at err ~ 0.83 fb_sigma).
 RELIABLE = 0.5
+#: Unreliable nodes within this fraction of the grid's longer side from its border are
+#: the view's blurred edge: the static world's parallax reaches the border through them.
+EDGE_BAND = 0.06
 
 
 def dominant_homography(points: np.ndarray, back_points: np.ndarray, reliable: np.ndarray,
@@ -138,7 +141,10 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     if support >= 1.0:
         return None
     clear = (reliable & (np.linalg.norm(residual, axis=1) > threshold)).reshape(grid_shape)
-    world = _reaching_border(clear)
+    # the view's edge is blurred by nodes of no reliable flow (what just came into view,
+    # flow extrapolated over the frame's edge): a region reaches the border through them
+    edge = _edge_band(~reliable.reshape(grid_shape))
+    world = _reaching_border(clear, edge)
     if world.sum() < support * reliable.sum():
         return None
     fit = fit_epipole(points, residual, world.ravel(), threshold=threshold)
@@ -153,22 +159,34 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     inliers = fit[1].reshape(grid_shape)
     reach = (ndimage.binary_dilation(inliers, structure=np.ones((3, 3), bool)) if view_moving
              else inliers)
-    explained = inliers & _reaching_border(reach)
+    explained = inliers & _reaching_border(reach, edge)
     if explained.sum() < max(8, support * reliable.sum()):
         return None
     h, w = flow_m.shape[:2]
-    region = cv2.resize(explained.astype(np.uint8), (w, h),
-                        interpolation=cv2.INTER_NEAREST) > 0
-    return (parallax_field(flow_m, fit[0], region, threshold=threshold), explained.ravel(),
-            fit[0])
+    region, unmeasured = (cv2.resize(m.astype(np.uint8), (w, h),
+                                     interpolation=cv2.INTER_NEAREST) > 0
+                          for m in (explained, ~reliable.reshape(grid_shape)))
+    return (parallax_field(flow_m, fit[0], region, threshold=threshold,
+                           unmeasured=unmeasured), explained.ravel(), fit[0])
 
 
-def _reaching_border(mask: np.ndarray) -> np.ndarray:
-    """(rows, cols) bool: the 8-connected parts of ``mask`` that touch the grid's border."""
-    comp, _ = ndimage.label(mask, structure=np.ones((3, 3), bool))
+def _edge_band(unreliable: np.ndarray) -> np.ndarray:
+    """(rows, cols) bool: the nodes of ``unreliable`` within ``EDGE_BAND`` of the grid's
+    longer side from its border."""
+    band = max(1, int(np.ceil(EDGE_BAND * max(unreliable.shape))))
+    near = np.zeros_like(unreliable)
+    near[:band] = near[-band:] = near[:, :band] = near[:, -band:] = True
+    return unreliable & near
+
+
+def _reaching_border(mask: np.ndarray, edge: np.ndarray | None = None) -> np.ndarray:
+    """(rows, cols) bool: the 8-connected parts of ``mask`` that touch the grid's border,
+    directly or through ``edge`` ((rows, cols) bool nodes that count as border)."""
+    comp, _ = ndimage.label(mask if edge is None else mask | edge,
+                            structure=np.ones((3, 3), bool))
     touch = at_border(comp)
     touch[0] = False  # label 0: outside the mask
-    return touch[comp]
+    return touch[comp] & mask
 
 
 class CameraMotion(NamedTuple):

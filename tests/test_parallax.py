@@ -26,13 +26,15 @@ def _world(gamma_band: float, body_motion: np.ndarray):
     return flow, band, body
 
 
-def _compensate(flow, parallax, view_moving=False):
+def _compensate(flow, parallax, view_moving=False, unreliable=None):
     grid = NodeGrid.build(H, W, 24, 5)
     pts = grid.points
     ix = np.clip(np.round(pts).astype(int), 0, [W - 1, H - 1])
     back = pts + flow[ix[:, 1], ix[:, 0]]
     prev = np.random.default_rng(0).integers(0, 255, (H, W, 3), dtype=np.uint8)
-    return compensate_camera(pts, back, np.ones(grid.n), flow, prev, support=0.5,
+    reliability = np.ones(grid.n) if unreliable is None else np.where(
+        unreliable[ix[:, 1], ix[:, 0]], 0.0, 1.0)
+    return compensate_camera(pts, back, reliability, flow, prev, support=0.5,
                              threshold=1.0, min_shift=0.25, parallax=parallax,
                              grid_shape=(grid.rows, grid.cols), view_moving=view_moving)
 
@@ -122,3 +124,53 @@ def test_in_a_moving_view_parallax_one_node_short_of_the_border_is_the_static_wo
     assert np.allclose(np.median(moving.flow[body], axis=0), [0.0, 4.0], atol=0.3)
     still = _compensate(flow, parallax=0.1).flow
     assert np.median(np.linalg.norm(still[inner], axis=-1)) > 2.0
+
+
+def test_parallax_reaches_the_border_through_a_rim_of_unreliable_flow():
+    # the band's outer rim has no reliable flow (what just came into view, flow
+    # extrapolated over the frame's edge: a forward-backward failure): the band still
+    # reaches the border through it and is the static world, in a still view too
+    flow, band, body = _world(0.06, np.array([0.0, 4.0]))
+    ys, xs = np.mgrid[0:H, 0:W]
+    rim = band & ((ys < 8) | (xs < 8) | (xs >= W - 8))
+    flow[rim] = np.random.default_rng(2).normal(0, 6, (rim.sum(), 2))  # misread
+    inner = band & ~rim
+    inner[:, :12] = inner[:, -12:] = inner[:12] = False
+    for view_moving in (False, True):
+        out = _compensate(flow, parallax=0.1, view_moving=view_moving, unreliable=rim)
+        assert out.homography is not None
+        assert np.median(np.linalg.norm(out.flow[inner], axis=-1)) < 0.3
+        assert np.allclose(np.median(out.flow[body], axis=0), [0.0, 4.0], atol=0.3)
+    # ... but not through a rim of unreliable flow away from the border: a body whose
+    # outline's flow failed is still bounded by the plane (it moves along its epipolar
+    # line, as parallax would)
+    centre = np.array([80.0, 80.0])
+    radial = 5.0 * (centre - E) / np.linalg.norm(centre - E)
+    flow, _, body = _world(0.0, radial)
+    outline = np.zeros_like(body)
+    outline[62:98, 62:98] = True
+    outline &= ~body
+    out = _compensate(flow, parallax=0.1, unreliable=outline)
+    assert np.allclose(np.median(out.flow[body], axis=0), radial, atol=0.3)
+
+
+def test_parallax_field_reaches_aligned_pixels_beside_the_region_and_stays_off_the_plane():
+    # the nodes found the band's parallax on all but its lowest rows, whose flow they
+    # could not trust; the strip's aligned residual joins it, and the plane beside the
+    # band, which has no parallax, gets none of the band's (not even its smooth
+    # interpolation)
+    flow, band, _ = _world(0.06, np.array([0.0, 0.0]))
+    residual = flow - SHIFT.astype(np.float32)
+    ys, xs = np.mgrid[0:H, 0:W]
+    strip = band & (ys >= 24)
+    e = np.array([*E, 1.0])
+    field = parallax_field(residual, e, band & ~strip, threshold=1.0, unmeasured=strip)
+    big = strip & (np.linalg.norm(residual, axis=-1) > 1.5)
+    assert big.sum() > 100
+    assert np.abs(field[big] - residual[big]).max() < 1e-3
+    beside = (ys >= 30) & (ys < 40)
+    assert np.abs(field[beside]).max() == 0.0
+    # where the nodes measured the strip (a body beside the static world, whose motion
+    # happens to line up with e), it is not reached
+    field = parallax_field(residual, e, band & ~strip, threshold=1.0)
+    assert np.abs(field[big]).max() == 0.0
