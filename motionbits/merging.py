@@ -344,7 +344,8 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
                      trans: np.ndarray, moving: set[int], first_new: int,
                      still_before: np.ndarray, carried: np.ndarray, back_points: np.ndarray,
                      reliability: np.ndarray, cur: np.ndarray, prev: np.ndarray, *,
-                     disagree: float, first_moved: dict[int, int]) -> None:
+                     disagree: float, first_moved: dict[int, int],
+                     min_agreeing: float = 0.0) -> None:
     """Record in ``groups`` this frame's evidence on every pair of touching MotionBits,
     and on the pairs seen agreeing before that no longer touch
     (:meth:`MotionBitGroups.observe_apart`).
@@ -362,7 +363,11 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     MotionBit's label inherits that one's disagreements (:meth:`MotionBitGroups.inherit`).
     Otherwise, where either has a motion this frame, one affine motion is fitted to the
     nodes of both and :func:`union_excess` is observed -- a member without motion stands
-    still (``STILL``), which can show that they differ, never that they agree.
+    still (``STILL``), which can show that they differ, never that they agree; nor can a
+    union motion under ``min_agreeing`` px (mean over the nodes): under a moving camera,
+    what stands still relative to the static world's model "moves" by that model's error,
+    and two such MotionBits (a body at rest, a mark spilled on the table beside it) agree
+    whatever they are.
 
     Args:
         groups: the relations, updated in place.
@@ -381,6 +386,9 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
         cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
         disagree: grey levels (config ``merge_disagree``).
         first_moved: id -> the frame at which it first moved (``MotionSpans.first``).
+        min_agreeing: px; agreement is recorded only where the union motion moves the
+            pair's nodes by at least this much (0: always; ``MIN_MOVED`` under a moving
+            camera).
     """
     own = {int(i): rigid_matrix(th, t) for i, th, t in zip(ids, thetas, trans)}
     reach = int(np.ceil(max(grid.cell)))
@@ -408,6 +416,6 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
         union = fit_affine(grid.points[sel], back_points[sel], reliability[sel])
         excess = union_excess(labels, a, b, boxes(), own.get(a, STILL), own.get(b, STILL),
                               union, cur, prev)
-        if (a in own and b in own) or excess > disagree:
-            moved = np.hypot(*(back_points[sel] - grid.points[sel]).T).mean()
-            groups.observe(a, b, excess, float(moved))
+        moved = float(np.hypot(*(back_points[sel] - grid.points[sel]).T).mean())
+        if (a in own and b in own and moved >= min_agreeing) or excess > disagree:
+            groups.observe(a, b, excess, moved)

@@ -39,8 +39,8 @@ from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, hide_edgeless,
                               hide_small, remove_specks, snap_to_edges,
                               trim_flat_background)
-from motionbits.merging import (MotionBitGroups, drop_seen_still, observe_touching, seen_still,
-                                standing_still)
+from motionbits.merging import (MIN_MOVED, MotionBitGroups, drop_seen_still, observe_touching,
+                                seen_still, standing_still)
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.propagation import grid_seeds, propagate_components
@@ -460,7 +460,8 @@ class MotionBitsSegmenter:
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
                              first_new, still_before, prior_nodes, back_pts, reliability,
                              cur_g, prev_g, disagree=cfg.merge_disagree,
-                             first_moved=self._spans.first)
+                             first_moved=self._spans.first,
+                             min_agreeing=0.0 if cam is None else MIN_MOVED)
             observed = labels
             before = np.flatnonzero(label_areas(labels)[1:]) + 1
             labels, self._origins = retire(labels, self._origins, ids, thetas, trans,

@@ -290,6 +290,31 @@ def test_a_piece_split_off_a_body_stays_apart_from_what_that_body_is_not(share, 
     assert (groups.representatives([1, 3])[3] == 1) != apart
 
 
+@pytest.mark.parametrize("min_agreeing, joined", [(0.0, True), (0.5, False)])
+def test_marks_that_barely_move_agree_only_above_the_motion_floor(min_agreeing, joined):
+    """Two touching MotionBits at rest, "moving" by 0.2 px (under a moving camera, the
+    static world's model is off by that much): one motion explains both, so they agree --
+    unless agreement needs a union motion of ``min_agreeing`` px (a body at rest and a
+    mark spilled on the table beside it are not one body for standing still together)."""
+    rng = np.random.default_rng(3)
+    h, w = 80, 120
+    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
+    cur = prev.copy()
+    grid = NodeGrid.build(h, w, 20, 5)
+    labels = np.zeros((h, w), np.int32)
+    labels[20:60, 20:60], labels[20:60, 60:100] = 1, 2
+    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
+    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    observe_touching(groups, grid, labels, node_ids, np.array([1, 2]), np.zeros(2),
+                     np.array([[-0.2, 0.0], [-0.2, 0.0]]), set(), 3, np.zeros(grid.n, int),
+                     node_ids, grid.points - np.array([0.2, 0.0], np.float32),
+                     np.ones(grid.n), cur, prev, disagree=6.0, first_moved={1: 1, 2: 1},
+                     min_agreeing=min_agreeing)
+    assert not groups.known(1, 2)  # never apart for good
+    assert (groups.representatives([1, 2])[2] == 1) == joined
+
+
 def test_static_memory_reveals_background_seen_again_after_it_was_covered():
     rng = np.random.default_rng(0)
     table = rng.integers(0, 256, (40, 60, 3), dtype=np.uint8)
