@@ -130,8 +130,10 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
         support: the epipole must explain the residual of at least this fraction of the
             reliable nodes (1.0 = off).
         threshold: px, as the homography's RANSAC threshold.
-        view_moving: the camera was seen moving at the last frame: the nodes that fit the
-            epipole may come within one node of the border instead of touching it.
+        view_moving: the camera was seen moving at the last frame: regions reach the
+            border also through its rim of unreliable nodes (``EDGE_BAND``), and the nodes
+            that fit the epipole may come within one node of the border instead of
+            touching it.
 
     Returns:
         (field, explained, epipole): the (H, W, 2) float32 parallax, the (n,) bool nodes
@@ -141,9 +143,11 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     if support >= 1.0:
         return None
     clear = (reliable & (np.linalg.norm(residual, axis=1) > threshold)).reshape(grid_shape)
-    # the view's edge is blurred by nodes of no reliable flow (what just came into view,
-    # flow extrapolated over the frame's edge): a region reaches the border through them
-    edge = _edge_band(~reliable.reshape(grid_shape))
+    # in a view already moving, the view's edge is blurred by nodes of no reliable flow
+    # (what just came into view, flow extrapolated over the frame's edge): a region
+    # reaches the border through them (in a still view, a person's sweater reaching the
+    # top border through its blurred outline is no static world)
+    edge = _edge_band(~reliable.reshape(grid_shape)) if view_moving else None
     world = _reaching_border(clear, edge)
     if world.sum() < support * reliable.sum():
         return None

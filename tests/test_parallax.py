@@ -128,19 +128,22 @@ def test_in_a_moving_view_parallax_one_node_short_of_the_border_is_the_static_wo
 
 def test_parallax_reaches_the_border_through_a_rim_of_unreliable_flow():
     # the band's outer rim has no reliable flow (what just came into view, flow
-    # extrapolated over the frame's edge: a forward-backward failure): the band still
-    # reaches the border through it and is the static world, in a still view too
+    # extrapolated over the frame's edge: a forward-backward failure): in a view seen
+    # moving, the band still reaches the border through it and is the static world; in a
+    # still view it does not (a person's sweater reaching the top border through its
+    # blurred outline)
     flow, band, body = _world(0.06, np.array([0.0, 4.0]))
     ys, xs = np.mgrid[0:H, 0:W]
     rim = band & ((ys < 8) | (xs < 8) | (xs >= W - 8))
     flow[rim] = np.random.default_rng(2).normal(0, 6, (rim.sum(), 2))  # misread
     inner = band & ~rim
     inner[:, :12] = inner[:, -12:] = inner[:12] = False
-    for view_moving in (False, True):
-        out = _compensate(flow, parallax=0.1, view_moving=view_moving, unreliable=rim)
-        assert out.homography is not None
-        assert np.median(np.linalg.norm(out.flow[inner], axis=-1)) < 0.3
-        assert np.allclose(np.median(out.flow[body], axis=0), [0.0, 4.0], atol=0.3)
+    out = _compensate(flow, parallax=0.1, view_moving=True, unreliable=rim)
+    assert out.homography is not None
+    assert np.median(np.linalg.norm(out.flow[inner], axis=-1)) < 0.3
+    assert np.allclose(np.median(out.flow[body], axis=0), [0.0, 4.0], atol=0.3)
+    still = _compensate(flow, parallax=0.1, unreliable=rim)
+    assert np.median(np.linalg.norm(still.flow[inner], axis=-1)) > 2.0
     # ... but not through a rim of unreliable flow away from the border: a body whose
     # outline's flow failed is still bounded by the plane (it moves along its epipolar
     # line, as parallax would)
