@@ -5,8 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["at_border", "grow_box", "label_areas", "label_boxes", "nonzero_box", "run_counts",
-           "run_starts"]
+__all__ = ["at_border", "grow_box", "label_areas", "label_boxes", "nonzero_box",
+           "pieces_holding", "run_counts", "run_starts"]
 
 
 def grow_box(box: tuple[slice, slice], reach: int, shape: tuple[int, ...]
@@ -49,6 +49,17 @@ def at_border(label_map: np.ndarray) -> np.ndarray:
     for edge in (label_map[0], label_map[-1], label_map[:, 0], label_map[:, -1]):
         touch[edge] = True
     return touch
+
+
+def pieces_holding(mask: np.ndarray, seeds: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the 8-connected pieces of the (H, W) bool ``mask`` that hold a pixel of
+    the (H, W) bool ``seeds``."""
+    n, pieces = cv2.connectedComponents(np.ascontiguousarray(mask).view(np.uint8),
+                                        connectivity=8)
+    held = np.zeros(n, bool)
+    held[pieces[seeds & mask]] = True
+    held[0] = False  # outside the mask
+    return held[pieces]
 
 
 def label_areas(label_map: np.ndarray) -> np.ndarray:

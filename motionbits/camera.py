@@ -142,12 +142,13 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     """
     if support >= 1.0:
         return None
-    clear = (reliable & (np.linalg.norm(residual, axis=1) > threshold)).reshape(grid_shape)
+    unreliable = ~reliable.reshape(grid_shape)
+    clear = (~unreliable & (np.linalg.norm(residual, axis=1) > threshold).reshape(grid_shape))
     # in a view already moving, the view's edge is blurred by nodes of no reliable flow
     # (what just came into view, flow extrapolated over the frame's edge): a region
     # reaches the border through them (in a still view, a person's sweater reaching the
     # top border through its blurred outline is no static world)
-    edge = _edge_band(~reliable.reshape(grid_shape)) if view_moving else None
+    edge = _edge_band(unreliable) if view_moving else None
     world = _reaching_border(clear, edge)
     if world.sum() < support * reliable.sum():
         return None
@@ -169,7 +170,7 @@ def fit_parallax(points: np.ndarray, residual: np.ndarray, reliable: np.ndarray,
     h, w = flow_m.shape[:2]
     region, unmeasured = (cv2.resize(m.astype(np.uint8), (w, h),
                                      interpolation=cv2.INTER_NEAREST) > 0
-                          for m in (explained, ~reliable.reshape(grid_shape)))
+                          for m in (explained, unreliable))
     return (parallax_field(flow_m, fit[0], region, threshold=threshold,
                            unmeasured=unmeasured), explained.ravel(), fit[0])
 

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from motionbits.boxes import at_border, grow_box, label_boxes
+from motionbits.boxes import at_border, grow_box, label_boxes, pieces_holding
 from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
                                  follow_known, follow_look, light_change)
@@ -192,12 +192,7 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     if body is None:
         return None, False
     # the pieces of the cut that hold mask pixels, where no mask is yet
-    n, pieces = cv2.connectedComponents((body & (free | mask)).view(np.uint8),
-                                        connectivity=8)
-    joined = np.zeros(n, bool)
-    joined[pieces[mask & body]] = True
-    joined[0] = False
-    new = joined[pieces] & free
+    new = pieces_holding(body & (free | mask), mask) & free
     if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
         new &= ~_shadowed(rgb[rows, cols], free & ~new)
     if not new.any():

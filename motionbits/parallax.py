@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy import ndimage
 
+from motionbits.boxes import pieces_holding
 from motionbits.flow import pixel_grid
 
 __all__ = ["epipolar_distance", "fit_epipole", "parallax_field"]
@@ -139,11 +139,7 @@ def parallax_field(residual: np.ndarray, e: np.ndarray, region: np.ndarray, *,
     along = (residual[..., 0] * u[..., 0] + residual[..., 1] * u[..., 1])
     aligned = (dist < threshold) & (np.abs(along) > threshold)
     aligned &= region if unmeasured is None else region | unmeasured
-    comp, n = ndimage.label(aligned, structure=np.ones((3, 3), bool))
-    keep = np.zeros(n + 1, bool)
-    keep[comp[region & aligned]] = True
-    keep[0] = False
-    fits = keep[comp]
+    fits = pieces_holding(aligned, region)
     own = (along[..., None] * u).astype(np.float32)
     # normalised convolution of the fitting pixels' parallax, at 1/4 size for speed
     small = (max(1, w // 4), max(1, h // 4))

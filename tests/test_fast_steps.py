@@ -6,7 +6,7 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.aperture import flat_regions, half_colour_gradient
-from motionbits.boxes import label_areas, label_boxes, nonzero_box, run_counts
+from motionbits.boxes import label_areas, label_boxes, nonzero_box, pieces_holding, run_counts
 from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
@@ -49,6 +49,18 @@ def test_label_boxes_are_find_objects():
     for labels in maps:
         for max_label in (0, 2, 12):
             assert label_boxes(labels, max_label) == ndimage.find_objects(labels, max_label)
+
+
+def test_pieces_holding_keeps_the_8_connected_pieces_with_a_seed():
+    mask = np.zeros((8, 10), bool)
+    mask[1:3, 1:3] = True  # seeded
+    mask[3, 3] = True  # touches it diagonally: the same piece
+    mask[5:7, 6:9] = True  # no seed
+    seeds = np.zeros_like(mask)
+    seeds[1, 1] = seeds[0, 9] = True  # the second seed lies outside the mask
+    out = pieces_holding(mask, seeds)
+    assert out[1:3, 1:3].all() and out[3, 3] and not out[5:7, 6:9].any()
+    assert out.sum() == 5
 
 
 def test_label_areas_are_bincount():
