@@ -22,6 +22,7 @@ COMMAND_MODULES = (
     "motionbits.commands.eval",
     "motionbits.commands.synth",
     "motionbits.commands.benchmark",
+    "motionbits.commands.compare",
     "motionbits.commands.scenes",
     "motionbits.commands.stack",
 )

@@ -1,0 +1,83 @@
+"""``motionbits compare``: is run B better than run A on the same scenes, beyond chance?"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from motionbits.outputs import check_output_file, write_text_atomic
+
+__all__ = ["register", "run", "load_run"]
+
+
+def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "compare",
+        help="compare two scored runs on the same scenes (paired, with a bootstrap CI)",
+        description=(
+            "Per track, the change of mIoU from run A to run B over the same GT bodies, a "
+            "bootstrap confidence interval over scenes, and how many scenes went up or down. "
+            "A and B are --json files of 'motionbits benchmark' or 'motionbits eval'."
+        ),
+    )
+    p.add_argument("a", metavar="A.json", help="the reference run")
+    p.add_argument("b", metavar="B.json", help="the run compared with it")
+    p.add_argument("--method", metavar="NAME",
+                   help="the method to compare where a file holds several (benchmark runs); "
+                        "default: the only one")
+    p.add_argument("--level", type=float, default=0.95,
+                   help="confidence level of the interval (default 0.95)")
+    p.add_argument("--json", metavar="FILE", help="write the comparison here")
+    p.set_defaults(func=run)
+    return p
+
+
+def load_run(path: str | Path, method: str | None = None) -> dict:
+    """The ``per_scene`` dict of one method in a ``benchmark`` / ``eval`` --json file.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ValueError: not such a file, or ``method`` is missing from it or needed to choose.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path} is not JSON: {exc}") from exc
+    if not isinstance(data, dict):
+        raise ValueError(f"{path} is not a --json file of motionbits benchmark or eval")
+    if "per_scene" in data:  # eval --json of one prediction folder
+        if method is not None:
+            raise ValueError(f"{path} holds one run (no methods); drop --method")
+        return data["per_scene"]
+    methods = data.get("methods")
+    if not isinstance(methods, dict) or not methods:
+        raise ValueError(f"{path} is not a --json file of motionbits benchmark or eval "
+                         "(no 'per_scene' or 'methods')")
+    if method is None:
+        if len(methods) > 1:
+            raise ValueError(f"{path} holds several methods ({', '.join(methods)}); "
+                             "choose one with --method")
+        method = next(iter(methods))
+    if method not in methods:
+        raise ValueError(f"{path} has no method {method!r} (it has {', '.join(methods)})")
+    return methods[method]["per_scene"]
+
+
+def run(args: argparse.Namespace) -> int:
+    from motionbits.eval.compare import compare_runs, format_comparison
+    from motionbits.eval.table import json_ready
+
+    if args.json:
+        check_output_file(args.json, "--json")
+    result = compare_runs(load_run(args.a, args.method), load_run(args.b, args.method),
+                          level=args.level)
+    if not result:
+        raise ValueError("no track of these runs has a GT body to compare")
+    print(format_comparison(result, names=("A", "B"), level=args.level), end="")
+    if args.json:
+        write_text_atomic(args.json, json.dumps(json_ready(
+            {"a": str(args.a), "b": str(args.b), "level": args.level, "tracks": result}),
+            indent=1, allow_nan=False))
+    return 0
