@@ -32,7 +32,7 @@ from scipy import ndimage
 from motionbits.boxes import at_border
 from motionbits.flow import pixel_grid, sample_maps
 from motionbits.nodes import sample_bilinear
-from motionbits.parallax import epipolar_distance, fit_epipole, parallax_field
+from motionbits.parallax import fit_epipole, parallax_field
 
 __all__ = ["dominant_homography", "compensate_flow", "world_maps", "stabilize_previous",
            "fit_parallax", "compensate_camera", "CameraMotion"]
@@ -205,9 +205,6 @@ class CameraMotion(NamedTuple):
     back_points: np.ndarray
     #: 3x3 camera homography (current -> previous); None: no camera motion found.
     homography: np.ndarray | None
-    #: (n,) bool nodes whose motion left by the homography lies along their epipolar line
-    #: (within the threshold), as the static world's parallax would; None: no parallax.
-    epipolar: np.ndarray | None = None
     #: (H, W, 2) float32, where each pixel of the static world was in the previous frame
     #: (the homography and its parallax, :func:`world_maps`); None: no camera motion.
     world: np.ndarray | None = None
@@ -248,10 +245,9 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     Returns:
         :class:`CameraMotion`: the backward flow (H, W, 2), the previous frame and the
         nodes' backward targets (n, 2) relative to the static world (homography and
-        parallax; 0 flow where the view just entered), the camera's 3x3 homography,
-        where parallax is found the nodes whose residual motion lies along their epipolar
-        lines, and the static world's (H, W, 2) map to the previous frame --
-        ``flow_back``, ``prev``, ``back_points``, None, None, None (the same objects) when
+        parallax; 0 flow where the view just entered), the camera's 3x3 homography and
+        the static world's (H, W, 2) map to the previous frame -- ``flow_back``, ``prev``,
+        ``back_points``, None, None (the same objects) when
         no camera motion is found.
     """
     if support >= 1.0:
@@ -285,13 +281,7 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     # the static world's model (the homography and its parallax) must explain enough nodes
     if explained[reliable].mean() < support:
         return CameraMotion(flow_back, prev, back_points, None)
-    par_field = epipolar = None
-    if par is not None:
-        par_field = par[0]
-        # a residual along its epipolar line is what the static world's parallax looks
-        # like, whether or not the smooth parallax field reproduces it (a box standing on
-        # the table, the floor far below it)
-        epipolar = epipolar_distance(points, back_m - points, par[2])[0] < threshold
+    par_field = None if par is None else par[0]
     maps = world_maps(cam, flow_m.shape[:2], par_field)
     prev_m = stabilize_previous(prev, cam, maps=maps)
     if par_field is not None:
@@ -302,5 +292,4 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     entered = ((maps[..., 0] < 0) | (maps[..., 0] > wd - 1) | (maps[..., 1] < 0)
                | (maps[..., 1] > ht - 1))
     flow_m[entered] = 0.0
-    return CameraMotion(flow_m, prev_m, points + sample_bilinear(flow_m, points), cam,
-                        epipolar, maps)
+    return CameraMotion(flow_m, prev_m, points + sample_bilinear(flow_m, points), cam, maps)

@@ -322,7 +322,7 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow (but those at rest)
-            flow_m, prev_m, back_pts, cam, epipolar, world = compensate_camera(
+            flow_m, prev_m, back_pts, cam, world = compensate_camera(
                 pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
                 threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
                 parallax=cfg.camera_parallax, grid_shape=(grid.rows, grid.cols),
@@ -383,13 +383,11 @@ class MotionBitsSegmenter:
             # (under a moving camera the memory follows the static world's model first)
             revealed = self._memory.observe(cur, cur_g, still, world)
             # births only (computed once, if a cluster asks); under a moving camera a birth
-            # must beat the static world's model given its error, and a node whose motion
-            # lies along its epipolar line (as parallax would) is no evidence of its own
+            # must beat the static world's model given its error
             evidence = cache(lambda: motion_gain(
                 still if cam is None else forgive_misalignment(still, gradient,
                                                                cfg.camera_tolerance),
-                cur_g, pulled, win)[ix[:, 1], ix[:, 0]] * (
-                    1.0 if epipolar is None else ~epipolar))
+                cur_g, pulled, win)[ix[:, 1], ix[:, 0]])
             # where something other than the static world last seen there stands now (a
             # newborn tumbling block, a body set down): evidence that no 2D motion gives
             changed = self._memory.changed()
