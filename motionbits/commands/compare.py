@@ -34,7 +34,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def load_run(path: str | Path, method: str | None = None) -> dict:
-    """The ``per_scene`` dict of one method in a ``benchmark`` / ``eval`` --json file.
+    """The ``per_scene`` dict of one method in a ``benchmark`` / ``eval`` --json file (a
+    file of one run, ``eval`` of one prediction folder, needs no ``method``).
 
     Raises:
         FileNotFoundError: no such file.
@@ -47,9 +48,7 @@ def load_run(path: str | Path, method: str | None = None) -> dict:
         raise ValueError(f"{path} is not JSON: {exc}") from exc
     if not isinstance(data, dict):
         raise ValueError(f"{path} is not a --json file of motionbits benchmark or eval")
-    if "per_scene" in data:  # eval --json of one prediction folder
-        if method is not None:
-            raise ValueError(f"{path} holds one run (no methods); drop --method")
+    if "per_scene" in data:  # eval --json of one prediction folder: ``method`` is moot
         return data["per_scene"]
     methods = data.get("methods")
     if not isinstance(methods, dict) or not methods:

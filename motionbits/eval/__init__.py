@@ -11,10 +11,12 @@ MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
     adjusted_rand_index(a, b)                               agreement of two partitions
     scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
     body_kinds(scene) / iou_by_kind(per_scene, kinds)       mean IoU per kind of body
+    compare_runs(a, b) / format_comparison(result)         two runs on the same scenes
 """
 
 from motionbits.eval.agreement import adjusted_rand_index
 from motionbits.eval.boundary import boundary_counts, boundary_map, boundary_tolerance
+from motionbits.eval.compare import compare_runs, format_comparison
 from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
@@ -40,4 +42,6 @@ __all__ = [
     "scenes_from_sequence",
     "body_kinds",
     "iou_by_kind",
+    "compare_runs",
+    "format_comparison",
 ]
