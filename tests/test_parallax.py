@@ -180,3 +180,58 @@ def test_parallax_field_reaches_aligned_pixels_beside_the_region_and_stays_off_t
     # happens to line up with e), it is not reached
     field = parallax_field(residual, e, band & ~strip, threshold=1.0)
     assert np.abs(field[big]).max() == 0.0
+
+
+def _moving_camera_clip(epipole, gamma, body_motion, n_frames=8, size=(240, 320)):
+    """Frames of a textured table seen by a translating camera (the table moves by 2, 0.5
+    px a frame), a background band along the top edge with parallax ``gamma * (p -
+    epipole)`` on top of it, and a textured 40x40 block on the table moving by
+    ``body_motion`` px a frame on top of the table; returns the frames and the block's
+    mask at the last one."""
+    import cv2
+
+    h, w = size
+
+    def texture(th, tw, seed):
+        t = np.random.default_rng(seed).integers(0, 255, (th // 4, tw // 4, 3)).astype(np.uint8)
+        return cv2.GaussianBlur(cv2.resize(t, (tw, th), interpolation=cv2.INTER_CUBIC), (3, 3), 0)
+
+    world, block = texture(h, w, 1), texture(40, 40, 2)
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
+    band = ys < h // 4
+    v = np.broadcast_to(np.float32([2.0, 0.5]), (h, w, 2)).copy()
+    v[band] += gamma * (np.stack([xs, ys], -1)[band] - np.float32(epipole))
+    frames, mask = [], None
+    for t in range(n_frames):
+        f = cv2.remap(world, xs - t * v[..., 0], ys - t * v[..., 1], cv2.INTER_LINEAR,
+                      borderMode=cv2.BORDER_REFLECT)
+        cx, cy = np.array([150.0, 150.0]) + t * (np.array([2.0, 0.5]) + body_motion)
+        x0, y0 = int(round(cx - 20)), int(round(cy - 20))
+        f[y0:y0 + 40, x0:x0 + 40] = block
+        mask = np.zeros((h, w), bool)
+        mask[y0:y0 + 40, x0:x0 + 40] = True
+        frames.append(f)
+    return frames, mask, band
+
+
+def test_a_block_pushed_along_its_epipolar_lines_is_a_motionbit():
+    # the camera translates with its epipole far above the image (an orbit's), the block
+    # is pushed 1.5 px a frame toward it: along its epipolar lines, as the static world's
+    # parallax would move. Until round 29 such motion was no evidence at birth and the
+    # block never got a mark; the band's parallax must still give none.
+    from motionbits import MotionBitsSegmenter
+
+    epipole = np.array([160.0, -300.0])
+    toward = 1.5 * (epipole - 150.0) / np.linalg.norm(epipole - 150.0)
+    frames, block, band = _moving_camera_clip(epipole, 0.012, toward)
+    seg = MotionBitsSegmenter()
+    for frame in frames:
+        labels = seg.update(frame).labels
+    assert seg._camera_moved  # the camera's motion was found
+    ids, counts = np.unique(labels[block], return_counts=True)
+    best = ids[ids > 0][np.argmax(counts[ids > 0])] if (ids > 0).any() else 0
+    assert best, "the pushed block has no MotionBit"
+    iou = (block & (labels == best)).sum() / (block | (labels == best)).sum()
+    assert iou > 0.5
+    assert (labels[band] > 0).mean() < 0.01  # the parallax band: no mark
+    assert (labels[~band & ~block] > 0).mean() < 0.02  # the table: none beyond the block's edge
