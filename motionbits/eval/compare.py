@@ -23,13 +23,18 @@ ALL_TRACKS = "all tracks"
 SCENE_CHANGE = 0.005
 
 
-def _paired(a: dict, b: dict) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
-    """Per track, one (a IoUs, b IoUs) pair of (n,) arrays per scene, bodies in GT order."""
+#: One scene of both runs: (n,) IoUs of run a and of run b (bodies in GT order), and the
+#: spurious marks of each.
+_Scene = tuple[np.ndarray, np.ndarray, float, float]
+
+
+def _paired(a: dict, b: dict) -> dict[str, list[_Scene]]:
+    """Per track, its scenes in both runs (:data:`_Scene`), in key order."""
     if set(a) != set(b):
         only = sorted(set(a) ^ set(b))
         raise ValueError(f"the two runs are not on the same scenes ({len(only)} scenes in one "
                          f"only, e.g. {only[0]})")
-    tracks: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    tracks: dict[str, list[_Scene]] = {}
     for key in sorted(a):
         ia = {i["gt"]: i["IoU"] for i in a[key]["instances"]}
         ib = {i["gt"]: i["IoU"] for i in b[key]["instances"]}
@@ -37,8 +42,10 @@ def _paired(a: dict, b: dict) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
             raise ValueError(f"scene {key}: the two runs score different GT bodies "
                              f"({sorted(ia)} vs {sorted(ib)}): not the same ground truth")
         gts = sorted(ia)
-        tracks.setdefault(_track(key), []).append(
-            (np.array([ia[g] for g in gts], float), np.array([ib[g] for g in gts], float)))
+        track = key.rsplit("/", 1)[0] if "/" in key else ""
+        tracks.setdefault(track, []).append(
+            (np.array([ia[g] for g in gts], float), np.array([ib[g] for g in gts], float),
+             a[key]["false_positives"]["spurious"], b[key]["false_positives"]["spurious"]))
     return tracks
 
 
@@ -73,23 +80,17 @@ def compare_runs(a: dict, b: dict, *, level: float = 0.95, samples: int = BOOTST
         groups[ALL_TRACKS] = [s for scenes in paired.values() for s in scenes]
     out = {}
     for track, scenes in groups.items():
-        keys = [k for k in sorted(a) if track == ALL_TRACKS or _track(k) == track]
-        summary = _summarize(scenes, [a[k] for k in keys], [b[k] for k in keys], rng,
-                             level, samples)
+        summary = _summarize(scenes, rng, level, samples)
         if summary is not None:
             out[track] = summary
     return out
 
 
-def _track(key: str) -> str:
-    return key.rsplit("/", 1)[0] if "/" in key else ""
-
-
-def _summarize(scenes: list[tuple[np.ndarray, np.ndarray]], a: list[dict], b: list[dict],
-               rng: np.random.Generator, level: float, samples: int) -> dict | None:
+def _summarize(scenes: list[_Scene], rng: np.random.Generator, level: float,
+               samples: int) -> dict | None:
     """One row of :func:`compare_runs` (None: no GT body in these scenes)."""
-    spurious_a = float(np.mean([s["false_positives"]["spurious"] for s in a]))
-    spurious_b = float(np.mean([s["false_positives"]["spurious"] for s in b]))
+    spurious_a = float(np.mean([s[2] for s in scenes]))
+    spurious_b = float(np.mean([s[3] for s in scenes]))
     scenes = [s for s in scenes if s[0].size]
     if not scenes:
         return None
