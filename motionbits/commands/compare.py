@@ -28,6 +28,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "default: the only one")
     p.add_argument("--level", type=float, default=0.95,
                    help="confidence level of the interval (default 0.95)")
+    p.add_argument("--scenes", type=int, default=0, metavar="N",
+                   help="also list the N scenes whose mIoU changed most, with the bodies "
+                        "that changed (default 0: none)")
     p.add_argument("--json", metavar="FILE", help="write the comparison here")
     p.set_defaults(func=run)
     return p
@@ -65,18 +68,25 @@ def load_run(path: str | Path, method: str | None = None) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    from motionbits.eval.compare import compare_runs, format_comparison
+    from motionbits.eval.compare import (compare_runs, format_comparison,
+                                         format_scene_changes, scene_changes)
     from motionbits.eval.table import json_ready
 
+    if args.scenes < 0:
+        raise ValueError(f"--scenes must be >= 0, got {args.scenes}")
     if args.json:
         check_output_file(args.json, "--json")
-    result = compare_runs(load_run(args.a, args.method), load_run(args.b, args.method),
-                          level=args.level)
+    a, b = load_run(args.a, args.method), load_run(args.b, args.method)
+    result = compare_runs(a, b, level=args.level)
     if not result:
         raise ValueError("no track of these runs has a GT body to compare")
     print(format_comparison(result, names=("A", "B"), level=args.level), end="")
+    saved = {"a": str(args.a), "b": str(args.b), "level": args.level, "tracks": result}
+    if args.scenes:
+        moved = scene_changes(a, b)[:args.scenes]
+        print(f"\nthe {len(moved)} scenes that changed most:")
+        print(format_scene_changes(moved), end="")
+        saved["scenes"] = moved
     if args.json:
-        write_text_atomic(args.json, json.dumps(json_ready(
-            {"a": str(args.a), "b": str(args.b), "level": args.level, "tracks": result}),
-            indent=1, allow_nan=False))
+        write_text_atomic(args.json, json.dumps(json_ready(saved), indent=1, allow_nan=False))
     return 0

@@ -12,11 +12,13 @@ MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
     scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
     body_kinds(scene) / iou_by_kind(per_scene, kinds)       mean IoU per kind of body
     compare_runs(a, b) / format_comparison(result)         two runs on the same scenes
+    scene_changes(a, b) / format_scene_changes(rows)        ... which scenes moved, how
 """
 
 from motionbits.eval.agreement import adjusted_rand_index
 from motionbits.eval.boundary import boundary_counts, boundary_map, boundary_tolerance
-from motionbits.eval.compare import compare_runs, format_comparison
+from motionbits.eval.compare import (compare_runs, format_comparison, format_scene_changes,
+                                     scene_changes)
 from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
@@ -44,4 +46,6 @@ __all__ = [
     "iou_by_kind",
     "compare_runs",
     "format_comparison",
+    "scene_changes",
+    "format_scene_changes",
 ]

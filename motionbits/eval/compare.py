@@ -11,9 +11,11 @@ shown by these scenes.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
-__all__ = ["compare_runs", "format_comparison", "ALL_TRACKS", "BOOTSTRAP_SAMPLES", "SCENE_CHANGE"]
+__all__ = ["compare_runs", "format_comparison", "scene_changes", "format_scene_changes", "ALL_TRACKS", "BOOTSTRAP_SAMPLES", "SCENE_CHANGE"]
 
 #: Bootstrap resamples of the scenes.
 BOOTSTRAP_SAMPLES = 5000
@@ -23,13 +25,20 @@ ALL_TRACKS = "all tracks"
 SCENE_CHANGE = 0.005
 
 
-#: One scene of both runs: (n,) IoUs of run a and of run b (bodies in GT order), and the
-#: spurious marks of each.
-_Scene = tuple[np.ndarray, np.ndarray, float, float]
+class _Scene(NamedTuple):
+    """One scene of both runs: its key, its GT ids (n,), the IoUs of run a and of run b
+    (n,) in that order, and the spurious marks of each."""
+
+    key: str
+    gts: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    spurious_a: float
+    spurious_b: float
 
 
 def _paired(a: dict, b: dict) -> dict[str, list[_Scene]]:
-    """Per track, its scenes in both runs (:data:`_Scene`), in key order."""
+    """Per track, its scenes in both runs (:class:`_Scene`), in key order."""
     if set(a) != set(b):
         only = sorted(set(a) ^ set(b))
         raise ValueError(f"the two runs are not on the same scenes ({len(only)} scenes in one "
@@ -43,9 +52,10 @@ def _paired(a: dict, b: dict) -> dict[str, list[_Scene]]:
                              f"({sorted(ia)} vs {sorted(ib)}): not the same ground truth")
         gts = sorted(ia)
         track = key.rsplit("/", 1)[0] if "/" in key else ""
-        tracks.setdefault(track, []).append(
-            (np.array([ia[g] for g in gts], float), np.array([ib[g] for g in gts], float),
-             a[key]["false_positives"]["spurious"], b[key]["false_positives"]["spurious"]))
+        tracks.setdefault(track, []).append(_Scene(
+            key, np.array(gts, int), np.array([ia[g] for g in gts], float),
+            np.array([ib[g] for g in gts], float),
+            a[key]["false_positives"]["spurious"], b[key]["false_positives"]["spurious"]))
     return tracks
 
 
@@ -89,14 +99,14 @@ def compare_runs(a: dict, b: dict, *, level: float = 0.95, samples: int = BOOTST
 def _summarize(scenes: list[_Scene], rng: np.random.Generator, level: float,
                samples: int) -> dict | None:
     """One row of :func:`compare_runs` (None: no GT body in these scenes)."""
-    spurious_a = float(np.mean([s[2] for s in scenes]))
-    spurious_b = float(np.mean([s[3] for s in scenes]))
-    scenes = [s for s in scenes if s[0].size]
+    spurious_a = float(np.mean([s.spurious_a for s in scenes]))
+    spurious_b = float(np.mean([s.spurious_b for s in scenes]))
+    scenes = [s for s in scenes if s.a.size]
     if not scenes:
         return None
-    n = np.array([s[0].size for s in scenes], float)
-    sum_a = np.array([s[0].sum() for s in scenes])
-    diff = np.array([(s[1] - s[0]).sum() for s in scenes])
+    n = np.array([s.a.size for s in scenes], float)
+    sum_a = np.array([s.a.sum() for s in scenes])
+    diff = np.array([(s.b - s.a).sum() for s in scenes])
     pick = rng.integers(0, len(scenes), (samples, len(scenes)))
     boot = diff[pick].sum(axis=1) / n[pick].sum(axis=1)
     tail = 100 * (1 - level) / 2
@@ -130,4 +140,44 @@ def format_comparison(result: dict[str, dict], names: tuple[str, str] = ("A", "B
     lines.append(f"delta: mIoU {b} - {a} over the same GT bodies; CI: bootstrap over scenes; "
                  f"up / down: scenes whose bodies' mean IoU moved by more than "
                  f"{100 * SCENE_CHANGE:.1f} points")
+    return "\n".join(lines) + "\n"
+
+
+def scene_changes(a: dict, b: dict) -> list[dict]:
+    """The scenes of two runs on the same scenes, the largest change of their bodies'
+    mean IoU first (where a change came from: a body found or lost).
+
+    Args:
+        a, b: ``per_scene`` dicts as for :func:`compare_runs`.
+
+    Returns:
+        One dict per scene with a GT body: ``{"scene", "mIoU_a", "mIoU_b", "delta",
+        "bodies": [(gt id, IoU a, IoU b), ...], "spurious_a", "spurious_b"}`` (IoUs as
+        fractions); ties keep the key order.
+
+    Raises:
+        ValueError: the runs cover different scenes or bodies.
+    """
+    rows = [{"scene": s.key, "mIoU_a": float(s.a.mean()), "mIoU_b": float(s.b.mean()),
+             "delta": float((s.b - s.a).mean()),
+             "bodies": [(int(g), float(x), float(y)) for g, x, y in zip(s.gts, s.a, s.b)],
+             "spurious_a": s.spurious_a, "spurious_b": s.spurious_b}
+            for scenes in _paired(a, b).values() for s in scenes if s.a.size]
+    return sorted(rows, key=lambda r: -abs(r["delta"]))
+
+
+def format_scene_changes(rows: list[dict], names: tuple[str, str] = ("A", "B")) -> str:
+    """One line per scene of :func:`scene_changes`' result (IoUs in %; each body's IoU in
+    A -> B where it changed in the two decimals shown)."""
+    a, b = names
+    width = max([len("scene")] + [len(r["scene"]) for r in rows]) + 2
+    head = (f"{'scene':<{width}}{'mIoU ' + a:>9}{'mIoU ' + b:>9}{'delta':>8}"
+            f"{'Spur ' + a:>8}{'Spur ' + b:>8}  bodies whose IoU changed ({a} -> {b})")
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        moved = "  ".join(f"{g}: {x:.2f} -> {y:.2f}" for g, x, y in r["bodies"]
+                          if f"{x:.2f}" != f"{y:.2f}")
+        lines.append(f"{r['scene']:<{width}}{100 * r['mIoU_a']:>9.1f}{100 * r['mIoU_b']:>9.1f}"
+                     f"{100 * r['delta']:>+8.1f}{r['spurious_a']:>8g}{r['spurious_b']:>8g}  "
+                     f"{moved or '-'}")
     return "\n".join(lines) + "\n"
