@@ -62,9 +62,13 @@ def as_rgb_array(frame: Any, *, name: str = "frame") -> np.ndarray:
     elif frame.ndim == 3 and frame.shape[2] == 4:
         frame = frame[..., :3]
     if frame.ndim != 3 or frame.shape[2] != 3:
+        first = (frame.ndim == 3 and frame.shape[0] in (1, 3, 4)
+                 and min(frame.shape[1:]) > 4)  # a channels-first (torch) layout
         raise ValueError(
             f"{name} must have shape (H, W, 3) (RGB), (H, W) (greyscale) or (H, W, 4) (RGBA); "
             f"got {frame.shape}"
+            + ("; it looks channels-first (C, H, W): pass frame.transpose(1, 2, 0)"
+               if first else "")
         )
     if frame.shape[0] == 0 or frame.shape[1] == 0:
         raise ValueError(f"{name} is empty: shape {frame.shape}")

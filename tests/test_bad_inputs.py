@@ -749,6 +749,8 @@ CASES: list[Case] = [
     Case("api/frame-uint16-scaled", api(lambda t: __import__("motionbits.video").video.as_rgb_frame(
         np.dstack([_GRAD16] * 3))), CORRECT, check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
     Case("api/frame-wrong-shape", api(lambda t: _segment([np.zeros((64, 64, 2), np.uint8)])), CLEAR, "shape"),
+    Case("api/frame-channels-first", api(lambda t: _segment([np.ascontiguousarray(_F[0].transpose(2, 0, 1))])),
+         CLEAR, "channels-first (C, H, W): pass frame.transpose(1, 2, 0)"),  # a torch tensor's layout
     Case("api/frame-none", api(lambda t: _segment([None])), CLEAR, "numpy array"),
     Case("api/size-change", api(lambda t: _segment([_F[0], _F[1][:100]], _small_config())), CLEAR, "call reset()"),
     Case("api/segment-video-every-0", api(lambda t: list(__import__("motionbits").segment_video(_F, every=0))), CLEAR, "every"),
