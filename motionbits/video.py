@@ -191,17 +191,8 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
         if not path.exists():
             raise FileNotFoundError(f"input not found: {path}")
         if path.is_dir():
-            first = None
             for i, f in enumerate(_image_files(path)):
-                frame = as_rgb_frame(read_image(f), name=f"frame {i} ({f.name})")
-                if first is None:
-                    first = f.name, frame.shape
-                elif frame.shape != first[1]:
-                    (h0, w0), (h, w) = first[1][:2], frame.shape[:2]
-                    raise ValueError(f"frame {i} ({f.name}) is {w}x{h} but the first frame "
-                                     f"({first[0]}) is {w0}x{h0}: the images of a folder are "
-                                     "the frames of one video and must all have one size")
-                yield frame
+                yield as_rgb_frame(read_image(f), name=f"frame {i} ({f.name})")
             return
         if path.suffix.lower() in IMAGE_SUFFIXES + MULTI_FRAME_IMAGE_SUFFIXES:
             if _image_pages(path) == 1:
