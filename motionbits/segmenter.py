@@ -269,7 +269,8 @@ class MotionBitsSegmenter:
         if self._input_size is not None and frame.shape[:2] != self._input_size:
             raise ValueError(
                 f"frame {self.frame_index + 1} is {frame.shape[1]}x{frame.shape[0]} but the stream "
-                f"started at {self._input_size[1]}x{self._input_size[0]}; call reset() for a new video"
+                f"started at {self._input_size[1]}x{self._input_size[0]}: the frames of one video "
+                "must all have one size (call reset() before a new video)"
             )
         if self._input_size is None:
             self._start(frame)  # raises for a frame too small, before the stream counts it
