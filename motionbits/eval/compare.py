@@ -15,7 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["compare_runs", "format_comparison", "scene_changes", "format_scene_changes", "ALL_TRACKS", "BOOTSTRAP_SAMPLES", "SCENE_CHANGE"]
+__all__ = ["compare_runs", "format_comparison", "scene_changes", "format_scene_changes",
+           "ALL_TRACKS", "BOOTSTRAP_SAMPLES", "SCENE_CHANGE"]
 
 #: Bootstrap resamples of the scenes.
 BOOTSTRAP_SAMPLES = 5000
