@@ -58,6 +58,12 @@ FACE_MASK_SHARE = 0.6
 #: 19) an arm or hand took the table squares it crossed (64.2 / 64.2 / 51.4).
 CLOSED_FACE_SHARE = 0.35
 CLOSED_FACE_GROWTH = 2.0
+#: ... but a flat region that reaches the image border and covers at least this share of
+#: the image is the ground or a wall (a plain white table): a mask that covers less than
+#: ``FACE_MASK_SHARE`` of it loses its pixels there. Fast motion smears the flow over
+#: a third of such a table, more than ``HALO_MASK_SHARE`` (``02_cups.mp4``: table
+#: pixels marked 6.3% -> 0.5% of the frames' mean, 38% at the worst frame; round 32).
+GROUND_SHARE = 0.1
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,
@@ -292,7 +298,10 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     a gap between two MotionBits of one body) are the body's. A body seen whole whose flow
     read motion on a part of a face only (a door, a drawer front) covers less of it, but
     the face is closed (inside the image) and not much larger than the mask; an arm or a
-    hand reaches the image border, and the table squares it crosses are closed too.
+    hand reaches the image border, and the table squares it crosses are closed too. A flat
+    region that reaches the border and covers ``GROUND_SHARE`` of the image is the ground
+    or a wall: a mask covering less than ``FACE_MASK_SHARE`` of it is an overhang there,
+    however large (fast motion smears the flow over a third of a plain table).
 
     Args:
         label_map: (H, W) int32 labels (0 = background).
@@ -313,14 +322,17 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     region, label = regions.ravel()[at], label_map.ravel()[at]
     pair = region.astype(np.int64) * (int(label_map.max()) + 1) + label
     share = np.bincount(pair)[pair] / area[region]
+    x, y, w, h = (stats[region, i] for i in range(4))
+    closed = (x > 0) & (y > 0) & (x + w < label_map.shape[1]) & (y + h < label_map.shape[0])
+    # a large flat region that leaves the image is the ground or a wall: a mask keeps its
+    # pixels there only if it holds most of it (a body's own face), not a halo's share
+    ground = ~closed & (area[region] >= GROUND_SHARE * label_map.size)
     out = label_map.astype(np.int32, copy=True)
-    out.ravel()[at[share < HALO_MASK_SHARE]] = 0
+    out.ravel()[at[(share < HALO_MASK_SHARE) | (ground & (share < FACE_MASK_SHARE))]] = 0
     # a flat region mostly inside one mask is that body's face: its uncovered pixels are
     # the body's too (where the flow read no motion on it), not the background's
     face = share >= FACE_MASK_SHARE
     # a closed flat region, a good part inside a mask seen whole, is that body's face too
-    x, y, w, h = (stats[region, i] for i in range(4))
-    closed = (x > 0) & (y > 0) & (x + w < label_map.shape[1]) & (y + h < label_map.shape[0])
     face |= (closed & ~at_border(label_map)[label] & (share >= CLOSED_FACE_SHARE)
              & (area[region] <= CLOSED_FACE_GROWTH * label_areas(label_map)[label]))
     if face.any():

@@ -373,6 +373,29 @@ def test_overhangs_of_several_bodies_onto_one_flat_table_are_all_trimmed():
         assert not (out[spill] > 0).any(), i
 
 
+def test_a_spill_over_a_third_of_a_plain_table_is_trimmed():
+    """Fast motion smears one body's flow over a third of a plain white table that reaches
+    the image border (02_cups.mp4): more than a halo's share of the table, still not the
+    body's. A large flat body that its mask mostly covers keeps its mask."""
+    rgb = np.full((240, 320, 3), (225, 225, 220), np.uint8)  # a flat white table
+    rgb[100:140, 140:180] = (200, 40, 40)  # a red cup
+    body = np.zeros((240, 320), bool)
+    body[100:140, 140:180] = True
+    labels = np.zeros((240, 320), np.int32)
+    labels[40:240, 60:260] = 1  # the cup and a spill over a third of the table
+    assert (labels[rgb[..., 1] == 225] > 0).mean() > 0.4
+    out = trim_flat_background(labels, rgb)
+    assert (out[body] == 1).all()
+    assert not (out[(labels == 1) & (ndimage.distance_transform_edt(~body) > 4)] > 0).any()
+    # the same mask on a large flat green board (a body) that it covers 70% of: kept
+    board = rgb.copy()
+    board[40:240, 60:260] = (40, 160, 40)
+    board[100:140, 140:180] = (200, 40, 40)
+    partial = labels.copy()
+    partial[180:240, 60:260] = 0
+    assert (trim_flat_background(partial, board)[partial > 0] == 1).mean() > 0.95
+
+
 def test_a_flat_face_mostly_inside_its_mask_is_completed_a_half_one_is_not():
     """A flat body whose mask has gaps (its flow read no motion in patches) gets the gaps;
     one whose mask covers only half of it is not grown where the face reaches the image
