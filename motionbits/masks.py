@@ -61,8 +61,9 @@ CLOSED_FACE_GROWTH = 2.0
 #: ... but a flat region that reaches the image border and covers at least this share of
 #: the image is the ground or a wall (a plain white table): a mask that covers less than
 #: ``FACE_MASK_SHARE`` of it loses its pixels there. Fast motion smears the flow over
-#: a third of such a table, more than ``HALO_MASK_SHARE`` (``02_cups.mp4``: table
-#: pixels marked 6.3% -> 0.5% of the frames' mean, 38% at the worst frame; round 32).
+#: a third of such a table, more than ``HALO_MASK_SHARE`` (``02_cups.mp4``, 16 frames:
+#: the table's pixels under a mark 6.3% -> 0.5% on average, 38% -> 0.6% at the worst
+#: frame; round 32).
 GROUND_SHARE = 0.1
 
 

@@ -374,9 +374,9 @@ def test_overhangs_of_several_bodies_onto_one_flat_table_are_all_trimmed():
 
 
 def test_a_spill_over_a_third_of_a_plain_table_is_trimmed():
-    """Fast motion smears one body's flow over a third of a plain white table that reaches
-    the image border (02_cups.mp4): more than a halo's share of the table, still not the
-    body's. A large flat body that its mask mostly covers keeps its mask."""
+    """Fast motion smears one body's flow over a large part of a plain white table that
+    reaches the image border (a third of it on 02_cups.mp4): more than a halo's share of
+    the table, still not the body's. A large flat body that its mask mostly covers keeps its mask."""
     rgb = np.full((240, 320, 3), (225, 225, 220), np.uint8)  # a flat white table
     rgb[100:140, 140:180] = (200, 40, 40)  # a red cup
     body = np.zeros((240, 320), bool)
