@@ -42,6 +42,11 @@ class StagedFolder:
                  replaceable: set[str] | None = None) -> None:
         self.dest = Path(dest)
         self.option = option
+        if not os.fspath(dest).strip():  # Path("") is "."
+            raise InputError(f"{option} is empty; name the folder to write, e.g. {option} out")
+        if self.dest.name in ("", ".."):  # ".", "..", "/": no sibling to stage in, nothing to rename
+            raise InputError(f"{option} {self.dest} is the current folder, one above it or the "
+                             f"root; name a folder of its own, e.g. {option} out")
         if self.dest.exists() and not self.dest.is_dir():
             raise InputError(f"{option} {self.dest} is a file, not a folder")
         if self.dest.is_dir():
@@ -116,6 +121,8 @@ def _names(entries: list[str], limit: int = 3) -> str:
 
 def check_output_file(path: str | os.PathLike, option: str) -> Path:
     """Fail early (before any work) if the file ``path`` could not be written later."""
+    if not os.fspath(path).strip():  # Path("") is "."; was: skipped, nothing written
+        raise InputError(f"{option} is empty; name the file to write")
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{option} {path} is a folder, not a file")

@@ -110,15 +110,15 @@ def run(args: argparse.Namespace) -> int:
             # a plug-in's optional dependency (the message names the extra), an unknown
             # option or a value of the wrong type: all before any scene is run
             raise InputError(f"method {name!r} cannot be built: {exc}") from exc
-    if args.json:
+    if args.json is not None:
         check_output_file(args.json, "--json")
     staged = (StagedFolder(args.save_pred, overwrite=args.overwrite, option="--save-pred",
-                           replaceable=set(known)) if args.save_pred else nullcontext())
+                           replaceable=set(known)) if args.save_pred is not None else nullcontext())
     with staged:  # predictions appear at --save-pred only if the whole run succeeded
         results, spf = run_benchmark(args.data, methods,
-                                     save_pred=staged.path if args.save_pred else None,
+                                     save_pred=staged.path if args.save_pred is not None else None,
                                      max_scenes=args.max_scenes, progress=not args.quiet)
-        if args.save_pred:
+        if args.save_pred is not None:
             staged.publish()
     print(format_table(results, block="macro", seconds_per_frame=spf), end="")
     if args.pooled:
@@ -128,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
     if kinds:  # scenes of motionbits synth name their bodies' kinds
         print()
         print(kinds, end="")
-    if args.json:
+    if args.json is not None:
         payload = {"methods": results, "seconds_per_frame": spf}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))
     return 0

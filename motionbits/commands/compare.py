@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.scenes < 0:
         raise ValueError(f"--scenes must be >= 0, got {args.scenes}")
-    if args.json:
+    if args.json is not None:
         check_output_file(args.json, "--json")
     a, b = load_run(args.a, args.method), load_run(args.b, args.method)
     result = compare_runs(a, b, level=args.level)
@@ -87,6 +87,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"\nthe {len(moved)} scenes that changed most:")
         print(format_scene_changes(moved), end="")
         saved["scenes"] = moved
-    if args.json:
+    if args.json is not None:
         write_text_atomic(args.json, json.dumps(json_ready(saved), indent=1, allow_nan=False))
     return 0

@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     from motionbits.eval.kinds import format_kinds
     from motionbits.eval.table import format_table, json_ready
 
-    if args.json:
+    if args.json is not None:
         check_output_file(args.json, "--json")
     results = {}
     for spec in args.pred:
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if kinds:  # scenes of motionbits synth name their bodies' kinds
         print()
         print(kinds, end="")
-    if args.json:
+    if args.json is not None:
         payload = next(iter(results.values())) if len(results) == 1 else {"methods": results}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))
     return 0

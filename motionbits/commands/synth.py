@@ -62,6 +62,8 @@ def _size(text: str) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     w, h = _size(args.size)
+    if not args.out.strip():  # Path("") is "." (was: wrote ./<track>, said "wrote /<track>")
+        raise InputError("--out is empty; name the folder to write, e.g. --out data")
     if Path(args.out).exists() and not Path(args.out).is_dir():
         raise InputError(f"--out {args.out} is a file, not a folder")
     if args.scenes < 1:
