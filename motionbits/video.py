@@ -79,7 +79,19 @@ def frame_order(path: Path) -> tuple:
     return tuple((0, int(t), t) if t.isdecimal() else (1, t) for t in parts if t)  # not "²"
 
 
+def check_no_broken_links(folder: Path) -> None:
+    """Raise ValueError if ``folder`` holds a link named like a frame whose target is
+    missing: skipping it would shift every later frame's index silently."""
+    broken = sorted((p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES
+                     and not p.name.startswith(".") and p.is_symlink() and not p.exists()),
+                    key=frame_order)
+    if broken:
+        raise ValueError(f"frame {broken[0].name} in {folder} is a broken link (to "
+                         f"{os.readlink(broken[0])}); restore or remove it")
+
+
 def _image_files(folder: Path) -> list[Path]:
+    check_no_broken_links(folder)
     files = sorted((p for p in folder.iterdir() if is_frame_file(p)), key=frame_order)
     if not files:
         raise ValueError(f"folder {folder} contains no images ({', '.join(IMAGE_SUFFIXES)})")
@@ -212,6 +224,11 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
             )
         if source.shape[0] == 0:
             raise ValueError("the array of frames is empty (T = 0)")
+        if source.ndim == 3 and source.shape[2] in (3, 4) and min(source.shape[:2]) >= 8:
+            # read as T greyscale frames 3 or 4 px wide (was: "frame 0 is too small ...")
+            raise ValueError(
+                f"an array of frames of shape {source.shape} reads as {source.shape[0]} greyscale "
+                f"frames {source.shape[2]} px wide; if it is one RGB frame, pass [frame] or frame[None]")
         for i in range(source.shape[0]):
             yield as_rgb_frame(source[i], name=f"frame {i}")
         return

@@ -27,7 +27,7 @@ from tqdm import tqdm
 from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
-from motionbits.video import frame_order, is_frame_file
+from motionbits.video import check_no_broken_links, frame_order, is_frame_file
 
 __all__ = [
     "Scene", "discover_scenes", "is_scene", "scene_frames", "load_frames", "load_ground_truth",
@@ -108,6 +108,7 @@ def scene_frames(scene: Scene | Path) -> list[Path]:
     folder = path / "frames"
     if not folder.is_dir():
         raise FileNotFoundError(f"scene {path} has no frames/ folder")
+    check_no_broken_links(folder)
     files = sorted((p for p in folder.iterdir() if is_frame_file(p)), key=frame_order)
     if not files:
         raise ValueError(f"{folder} holds no frame images")
