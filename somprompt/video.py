@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import numbers
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -228,13 +229,15 @@ def write_gif(frames: Sequence[ImageLike], path: "str | os.PathLike", fps: float
     """Write RGB frames to a looping GIF (Pillow).
 
     Raises:
-        ValueError: no frames, frames of different sizes, ``fps`` <= 0, or ``path`` does
-            not end in ``.gif``.
+        ValueError: no frames, frames of different sizes, ``fps`` not a number >= 100 / 65535
+            (a GIF frame lasts at most 655.35 s), or ``path`` does not end in ``.gif``.
         IsADirectoryError: ``path`` is a folder.
     """
     arrs = _as_arrays(frames)
-    if not fps > 0:
-        raise ValueError(f"fps must be > 0, got {fps}")
+    # a GIF's frame delay is at most 65535 centiseconds (was: OverflowError from Pillow)
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not fps >= 100 / 65535:
+        raise ValueError(f"fps must be a number >= {100 / 65535:.5f} (a GIF frame lasts at most "
+                         f"655.35 s), got {fps!r}")
     path = Path(path)
     if path.is_dir():  # else PIL's "unknown file extension: "
         raise IsADirectoryError(f"{path} is a folder; pass the GIF file to write, e.g. {path / 'marks.gif'}")
