@@ -532,6 +532,9 @@ CASES: list[Case] = [
     Case("segment/mixed-sizes", cli(S, "{a}/mixed", "--out", "{t}/out", *SEG), CLEAR,
          "started at 160x120: the frames of one video must all have one size", absent=("out",)),
     Case("segment/corrupt-png-among-good", cli(S, "{a}/corrupt", "--out", "{t}/out", *SEG), CLEAR, "00002.png", absent=("out",)),
+    Case("segment/broken-link-frame", prepared(lambda t: (_write_frames(t / "f", _F[:2]), (t / "f" / "00002.png").symlink_to(
+        t / "gone.png")), cli(S, "{t}/f", "--out", "{t}/out", *SEG)), CLEAR, "00002.png in",
+        absent=("out",)),  # was: skipped silently, later frames shifted
     Case("segment/truncated-video-warns", cli(S, "{a}/cut.avi", "--out", "{t}/out", *SEG), CORRECT,
          check=lambda o, t: ("header says 20 frames" in o.err and json.loads(
              (t / "out/summary.json").read_text())["input_frames"] == {"expected": 20, "decoded": 10})),
@@ -571,6 +574,10 @@ CASES: list[Case] = [
          CORRECT, check=lambda o, t: labels_in(t / "out") == ["00001.png", "00003.png"]),
     Case("segment/frames-beyond-end", cli(S, "{a}/frames", "--out", "{t}/out", "--frames", "50", *SEG), CORRECT, check=seg_ok(6)),
     Case("segment/nested-new-out", cli(S, "{a}/one", "--out", "{t}/a/b/c", *SEG), CORRECT, check=seg_ok(1, "a/b/c")),
+    Case("segment/out-empty", in_tmp(cli(S, "{a}/one", "--out", "", *SEG)), CLEAR,
+         "--out is empty"),  # was: "--out . already holds files", or errno 16 in an empty folder
+    Case("segment/out-current-folder", in_tmp(cli(S, "{a}/one", "--out", ".", *SEG)), CLEAR,
+         "is the current folder"),  # was: "[Errno 16] Device or resource busy: '.' -> '..partial-...old'"
     # ---- segment: options (checked before any frame)
     Case("segment/every-0", cli(S, "{a}/frames", "--out", "{t}/out", "--every", "0"), CLEAR, "--every", absent=("out",)),
     Case("segment/every-negative", cli(S, "{a}/frames", "--out", "{t}/out", "--every", "-2"), CLEAR, "--every", absent=("out",)),
@@ -639,6 +646,8 @@ CASES: list[Case] = [
     Case("eval/size-mismatch", cli("eval", "--pred", "{a}/pred_small", "--gt", "{a}/data", "--quiet"), CLEAR, "shape"),
     Case("eval/json-is-a-folder", prepared(lambda t: (t / "j").mkdir(), cli(
         "eval", "--pred", "{a}/pred", "--gt", "{a}/data", "--json", "{t}/j")), CLEAR, "is a folder"),
+    Case("eval/json-empty", cli("eval", "--pred", "{a}/pred", "--gt", "{a}/data", "--quiet", "--json", ""), CLEAR,
+         "--json is empty"),  # was: scored, no JSON written, exit 0
     Case("eval/duplicate-names", cli("eval", "--pred", "x={a}/pred", "--pred", "x={a}/pred", "--gt", "{a}/data", "--quiet"),
          CLEAR, "share the name"),
     Case("eval/no-prediction-for-scene", prepared(lambda t: (t / "p").mkdir(), cli(
@@ -650,6 +659,8 @@ CASES: list[Case] = [
         CORRECT, check=eval_json_f1(0.0)),
     # ---- synth
     Case("synth/out-is-a-file", prepared(a_file("s"), cli("synth", "--track", "robot", "--out", "{t}/s")), CLEAR, "is a file"),
+    Case("synth/out-empty", in_tmp(cli("synth", "--track", "robot", "--out", "")), CLEAR,
+         "--out is empty"),  # was: wrote ./robot and said "wrote /robot"
     Case("synth/without-mujoco", cli("synth", "--track", "robot", "--out", "{t}/s", patches=(without("mujoco"),)),
          CLEAR, "pip install", absent=("s",)),
     Case("synth/size-too-small", cli("synth", "--track", "robot", "--out", "{t}/s", "--size", "16x16"), CLEAR, "too small", absent=("s",)),
@@ -706,6 +717,9 @@ CASES: list[Case] = [
         "benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--json", "{t}/j")), CLEAR, "is a folder"),
     Case("benchmark/save-pred-not-empty", prepared(unrelated_files, cli(
         "benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--save-pred", "{t}/out")), CLEAR, "--overwrite"),
+    Case("benchmark/save-pred-empty", in_tmp(cli("benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--quiet",
+                                                 "--save-pred", "")), CLEAR,
+         "--save-pred is empty"),  # was: ran, saved nothing, exit 0
     Case("benchmark/save-pred", cli("benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--quiet",
                                     "--save-pred", "{t}/sp"),
          CORRECT, check=lambda o, t: (t / "sp/flow-cc/robot/scene_0000.png").is_file()),
@@ -758,6 +772,8 @@ CASES: list[Case] = [
          CLEAR, "every"),  # was: frames 0, 3, 6, ... kept by i % 1.5 == 0
     Case("api/segment-video-every-str", api(lambda t: list(__import__("motionbits").segment_video(_F, every="2"))),
          CLEAR, "every"),
+    Case("api/segment-video-one-rgb-frame", api(lambda t: list(__import__("motionbits").segment_video(_F[0]))), CLEAR,
+         "pass [frame] or frame[None]"),  # was: "frame 0 is too small to segment: 3x160 pixels"
     Case("api/iter-frames-bytes-path", api(lambda t: list(__import__("motionbits.video").video.iter_frames(
         str(t / "x.mp4").encode()))), CLEAR, "os.fsdecode"),
     Case("api/sample-indices-float", api(lambda t: __import__("motionbits").sample_frame_indices(10, 2.5)), CLEAR,
@@ -831,6 +847,10 @@ CASES: list[Case] = [
          CLEAR, "fps must be"),  # was: OverflowError
     Case("somprompt/write-gif-to-folder", api(lambda t: __import__("somprompt").write_gif(list(_F), t)), CLEAR,
          "is a folder"),  # was: PIL's "unknown file extension: "
+    Case("somprompt/write-gif-fps-tiny", api(lambda t: __import__("somprompt").write_gif(list(_F), t / "v.gif", fps=1e-3)),
+         CLEAR, "fps must be"),  # was: OverflowError (a GIF frame lasts at most 655.35 s)
+    Case("somprompt/write-gif-fps-str", api(lambda t: __import__("somprompt").write_gif(list(_F), t / "v.gif", fps="10")),
+         CLEAR, "fps must be"),  # was: "'>' not supported between instances of 'str' and 'int'"
     Case("somprompt/prompt-not-utf8", api(lambda t: ((t / "p.txt").write_bytes(b"\xff\xfe {question}"),
                                                       __import__("somprompt").load_prompt("p", prompts_dir=t))),
          CLEAR, "p.txt is not UTF-8"),  # was: "'utf-8' codec can't decode byte 0xff" (which file?)
