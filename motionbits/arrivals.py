@@ -35,6 +35,14 @@ there, if that one stands still beside it, and else becomes a new MotionBit, con
 the next frame if it still stands there (as SetDown's pieces): shown at once if it is
 solid and no moving MotionBit surrounds it, else from the next frame
 (:meth:`motionbits.setdown.SetDown.adopt`; README, "Bodies that arrived", round 21).
+
+A body may also arrive where no MotionBit ever was: the flow read it moving (a block
+carried under a hand whose MotionBit held the hand only), and no cluster took it. The
+memory also keeps where the flow was seen moving since the static world was last seen
+still there; a piece of such pixels that passes the tests above and touches no MotionBit
+is a new MotionBit of its own (its parts within one grid cell are one piece, and pieces
+found at one frame within ``JOIN_CELLS`` grid cells are one body). Such pieces do not
+wait. README "Moving cameras", round 33.
 Under a moving camera the memory follows the static world's model (homography and
 parallax) before each search.
 It is folded in with :class:`motionbits.revealed.StaticMemory`'s pixels seen still, so it
@@ -53,7 +61,8 @@ from motionbits.revealed import (WINDOW, _color_difference, follow_ids, follow_k
                                  follow_look, light_change)
 from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
 
-__all__ = ["Arrivals", "Arrival", "LIGHT_CHROMA", "LIGHT_RESIDUAL", "SURROUND_DIFFERENCE"]
+__all__ = ["Arrivals", "Arrival", "LIGHT_CHROMA", "LIGHT_RESIDUAL", "SURROUND_DIFFERENCE",
+           "JOIN_CELLS"]
 
 #: Largest median change of chromaticity (each channel over the sum of the three) of a
 #: piece that is the static world under other light ...
@@ -70,6 +79,9 @@ SURROUND_RING = (3, 10)
 SURROUND_MIN = 20
 #: px: a piece within this of a MotionBit's pixels touches it.
 TOUCH = 2
+#: Grid cells within which pieces of a body that no MotionBit followed, found at one
+#: frame, are one body (a block's faces, parted by its edges).
+JOIN_CELLS = 3
 #: Grid cells around a MotionBit standing still within which the rest of its body is
 #: sought. Pick-and-place mIoU 42.4 -> 49.5, robot / hand 62.5 / 62.0 -> 64.1 / 63.1
 #: (round 17, README "Bodies that arrived").
@@ -101,6 +113,7 @@ class Arrivals:
         self._waiting = np.zeros(shape, bool)  # this frame's pieces still too small
         self._largest: dict[int, int] = {}  # id present -> its largest area so far (px)
         self._followed = False  # carried along a moving camera's model at some frame
+        self.stirred = np.zeros(shape, bool)  # seen moving since last seen still, unlabelled
 
     def follow(self, world: np.ndarray) -> None:
         """Carry the memory to the current frame of a moving camera, as
@@ -112,6 +125,7 @@ class Arrivals:
         self.known = follow_known(self.known, world)
         self.background = follow_look(self.background, world)
         self.visited = follow_ids(self.visited, world)
+        self.stirred = follow_ids(self.stirred.view(np.uint8), world) > 0
 
     def find(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
              labels: np.ndarray, cell: tuple[float, float], moving: set[int]
@@ -142,6 +156,38 @@ class Arrivals:
             candidate[box] |= cv2.dilate(still[box].view(np.uint8),
                                          np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
         candidate &= self.known & (labels == 0)
+        found = []
+        for at, piece, ring in self._pieces(candidate, cur, cur_gray, prev_gray, labels, cell):
+            beside = ring[standing[ring]]
+            body = int(np.bincount(beside).argmax()) if beside.size else 0
+            visited = self.visited[at][piece]
+            if body and piece.sum() <= self._largest.get(body, 0):
+                parent = body  # the rest of the body standing beside it
+            elif np.count_nonzero(visited) >= 0.5 * visited.size:  # where a MotionBit passed
+                parent = int(np.bincount(visited)[1:].argmax()) + 1
+            else:
+                continue
+            found.append((at, piece, parent))
+        # a body that no MotionBit followed (the flow read its motion, no cluster took it):
+        # seen moving since the static world was seen there, at rest now apart from every
+        # MotionBit; its pieces within JOIN_CELLS grid cells of each other are one body
+        unfollowed = self.stirred & self.known & (labels == 0) & ~candidate
+        for at, piece, ring in self._pieces(unfollowed, cur, cur_gray, prev_gray, labels, cell,
+                                            unfollowed=True):
+            if not ring.any():
+                found.append((at, piece, 0))
+        return found
+
+    def _pieces(self, candidate: np.ndarray, cur: np.ndarray, cur_gray: np.ndarray,
+                prev_gray: np.ndarray, labels: np.ndarray, cell: tuple[float, float],
+                unfollowed: bool = False
+                ) -> list[tuple[tuple[slice, slice], np.ndarray, np.ndarray]]:
+        """The pieces of ``candidate`` ((H, W) bool) that look unlike the remembered static
+        world, stand still, are compact and large enough, and are neither the static world
+        under other light nor the surface around them continued (module docstring); those
+        still too small wait. For bodies no MotionBit followed (``unfollowed``), parts
+        within one grid cell of each other count as one piece, and nothing waits. Each as
+        (image box, (h, w) bool piece in it, (k,) int32 labels it touches)."""
         if not candidate.any():
             return []
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
@@ -153,51 +199,48 @@ class Arrivals:
         mask = (candidate[box] & changed & still).view(np.uint8)
         # a body uncovered a strip at a time grows a frame at a time: pieces too small or
         # too thin yet are not taken into the static world
-        self._waiting[box] = mask > 0
+        if not unfollowed:
+            self._waiting[box] = mask > 0
         if cv2.countNonZero(mask) < min_area:  # no piece can be large enough
             return []
-        side = max(1, int(round(COMPACT_CELLS * max(cell))))
+        square = np.ones((max(1, int(round(COMPACT_CELLS * max(cell)))),) * 2, np.uint8)
+        opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, square)
         n, comp, stats, _ = cv2.connectedComponentsWithStats(
-            cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((side, side), np.uint8)),
-            connectivity=8)
-        found = []
+            cv2.dilate(opened, square) if unfollowed else opened, connectivity=8)
+        pieces = []
         for k in range(1, n):
             if stats[k, cv2.CC_STAT_AREA] < min_area:
                 continue
             x, y, w, h = stats[k, :4]
-            piece = comp[y:y + h, x:x + w] == k
+            piece = (comp[y:y + h, x:x + w] == k) & (opened[y:y + h, x:x + w] > 0)
+            if np.count_nonzero(piece) < min_area:
+                continue
             at = (slice(box[0].start + y, box[0].start + y + h),
                   slice(box[1].start + x, box[1].start + x + w))
-            self._waiting[at][piece] = False
+            if not unfollowed:
+                self._waiting[at][piece] = False
             if (_relit(cur[at], self.background[at], piece)
                     or _like_surroundings(cur, labels, at, piece,
                                           None if self._followed else self.background)):
                 continue
             around, ring = _ring(labels.shape, at, piece, 0, TOUCH)
             ring = labels[around][ring]  # the labels it touches
-            beside = ring[standing[ring]]
-            body = int(np.bincount(beside).argmax()) if beside.size else 0
-            visited = self.visited[at][piece]
-            if body and piece.sum() <= self._largest.get(body, 0):
-                parent = body  # the rest of the body standing beside it
-            elif np.count_nonzero(visited) >= 0.5 * visited.size:  # where a MotionBit passed
-                parent = int(np.bincount(visited)[1:].argmax()) + 1
-            else:
-                continue
-            found.append((at, piece, parent))
-        return found
+            pieces.append((at, piece, ring[ring > 0]))
+        return pieces
 
     def place(self, labels: np.ndarray, arrivals: list[Arrival], moving: set[int], reach: int,
               next_id: int) -> tuple[np.ndarray, np.ndarray, dict[int, int], int]:
         """Put the pieces into the label map: a piece within ``reach`` px of the MotionBit
         that last covered it, while that MotionBit stands still, takes its id (the rest of
-        that body); any other takes a new id.
+        that body); a piece no MotionBit followed (parent 0) within ``JOIN_CELLS * reach``
+        px of another placed now takes that one's id (faces of one body); any other takes a
+        new id.
 
         Args:
             labels: (H, W) int32 label map of this frame; changed in place.
             arrivals: from :meth:`find`.
             moving: ids of the MotionBits that move now.
-            reach: px.
+            reach: px, one grid cell.
             next_id: the id the next new MotionBit gets.
 
         Returns:
@@ -206,30 +249,41 @@ class Arrivals:
         """
         held = np.zeros(labels.shape, bool)
         born: dict[int, int] = {}
+        unfollowed: list[int] = []  # new ids of the pieces no MotionBit followed
         for box, piece, parent in arrivals:
             near = labels[grow_box(box, reach, labels.shape)]
-            if parent not in moving and (near == parent).any():
+            joins = [] if parent else [i for i in unfollowed if (
+                labels[grow_box(box, JOIN_CELLS * reach, labels.shape)] == i).any()]
+            if parent and parent not in moving and (near == parent).any():
                 new = parent
+            elif joins:
+                new = joins[0]
             else:
                 new, next_id = next_id, next_id + 1
                 born[new] = parent
+                if not parent:
+                    unfollowed.append(new)
             labels[box][piece] = new
             held[box][piece] = True
         return labels, held, born, next_id
 
-    def update(self, cur: np.ndarray, calm: np.ndarray, labels: np.ndarray) -> None:
+    def update(self, cur: np.ndarray, calm: np.ndarray, labels: np.ndarray,
+               moved: np.ndarray) -> None:
         """Fold in the current frame.
 
         Args:
             cur: (H, W, 3) uint8 current RGB frame.
             calm: (H, W) bool, seen standing still now (:meth:`StaticMemory.update`).
             labels: (H, W) int32 this frame's MotionBit ids.
+            moved: (H, W) bool, seen moving now (reliable flow, relative to the camera).
         """
         free = calm & (labels == 0) & ~self._waiting
         # in place (boolean-mask assignment is several times slower)
         cv2.copyTo(cur, free.view(np.uint8), self.background)
         self.known |= free
         self.visited *= ~free
+        self.stirred |= moved
+        self.stirred &= ~free
         cv2.copyTo(labels, (labels > 0).view(np.uint8), self.visited)
         areas = label_areas(labels)
         self._largest = {int(i): max(self._largest.get(int(i), 0), int(areas[i]))

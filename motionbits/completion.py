@@ -47,13 +47,13 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from motionbits.boxes import at_border, grow_box, label_boxes, pieces_holding
+from motionbits.boxes import at_border, grow_box, label_boxes, nonzero_box, pieces_holding
 from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
                                  follow_known, follow_look, light_change)
 
 __all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "WIDER",
-           "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE"]
+           "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE", "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
@@ -87,6 +87,13 @@ RECALL_IOU = 0.8
 #: grey levels (any channel) since.
 RECALL_CHANGED = 0.05
 RECALL_LEVEL = 12
+#: A mark stands as first seen (:meth:`FirstLook.as_first_seen`) when the first look
+#: knows at least this share of its pixels ...
+FIRST_SEEN_KNOWN = 0.5
+#: ... and at most this share of those look otherwise now (a static body marked through
+#: parallax or smeared flow; a block kicked 2 cm changes 16-24% of its first look, README
+#: "Marks as first seen").
+FIRST_SEEN_CHANGED = 0.05
 
 
 def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[int] = (),
@@ -273,6 +280,32 @@ class FirstLook:
         ``CameraMotion.world``), as :meth:`motionbits.arrivals.Arrivals.follow` does."""
         self.look = follow_look(self.look, world)
         self.known = follow_known(self.known, world)
+
+    def as_first_seen(self, label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
+        """Ids of the marks that stand where and as they were first seen: the first look
+        knows ``FIRST_SEEN_KNOWN`` of the mark's pixels and at most ``FIRST_SEEN_CHANGED``
+        of those look otherwise now (:meth:`changed`). Nothing moved there.
+
+        Args:
+            label_map: (H, W) int32 marks (0 = background).
+            rgb: (H, W, 3) uint8 current frame.
+
+        Returns:
+            (K,) int64 ids, ascending.
+        """
+        box = nonzero_box(label_map)
+        labels = label_map[box].ravel()
+        if not labels.size:
+            return np.zeros(0, np.int64)
+        known = self.known[box].ravel()
+        area = np.bincount(labels)
+        seen = np.bincount(labels, weights=known)
+        changed = np.bincount(labels, weights=self.changed(rgb, box).ravel(),
+                              minlength=area.size)
+        same = ((area > 0) & (seen >= FIRST_SEEN_KNOWN * area)
+                & (changed <= FIRST_SEEN_CHANGED * seen))
+        same[0] = False
+        return np.flatnonzero(same)
 
     def changed(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame

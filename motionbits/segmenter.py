@@ -36,8 +36,8 @@ from motionbits.graph import (
     twist_edge_weights,
 )
 from motionbits.identity import identify_clusters
-from motionbits.masks import (SPECK_CELLS, assign_pixels, fit_cluster_motions, hide_edgeless,
-                              hide_small, remove_specks, snap_to_edges,
+from motionbits.masks import (SPECK_CELLS, assign_pixels, drop_labels, fit_cluster_motions,
+                              hide_edgeless, hide_small, remove_specks, snap_to_edges,
                               trim_flat_background)
 from motionbits.merging import (MIN_MOVED, MotionBitGroups, drop_seen_still, observe_touching,
                                 seen_still, standing_still)
@@ -491,7 +491,7 @@ class MotionBitsSegmenter:
             shadows = cast_shadows(self._memory, cur, labels, self._first_look)
             calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
             if calm is not None:
-                self._arrivals.update(cur, calm, labels)
+                self._arrivals.update(cur, calm, labels, reliable & ~standing)
                 self._first_look.update(cur, calm, labels)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
@@ -533,6 +533,10 @@ class MotionBitsSegmenter:
             # outline), on a body and an image that did not change, is shown as it was
             still_marks = {r for r in rep.values() if r} - moving_marks
             shown = self._rest_marks.hold(shown, cur, state, still_marks)
+            # nothing moved where a mark stands as first seen (a static body marked through
+            # parallax or smeared flow)
+            if calm is not None:
+                shown = drop_labels(shown, self._first_look.as_first_seen(shown, cur))
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

@@ -34,9 +34,9 @@ def _memory_after_a_pass(background: np.ndarray, parent: int = 7) -> Arrivals:
     cover the block's place."""
     memory = Arrivals(background.shape[:2], COVERED, REST)
     labels = np.zeros(background.shape[:2], np.int32)
-    memory.update(background, np.ones(labels.shape, bool), labels)
+    memory.update(background, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     labels[BLOCK] = parent
-    memory.update(background, np.zeros(labels.shape, bool), labels)
+    memory.update(background, np.zeros(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     return memory
 
 
@@ -60,6 +60,37 @@ def test_a_body_at_rest_where_the_table_was_is_found_with_the_motionbit_that_cov
     elsewhere = table.copy()
     elsewhere[80:110, 100:130] = (190, 50, 40)
     assert _find(_memory_after_a_pass(table), elsewhere) == []
+
+
+def test_a_body_seen_moving_that_no_motionbit_followed_is_found_alone_and_whole():
+    """A block carried where no MotionBit held it (the flow read it moving, no cluster took
+    it) stands at rest on the table seen there before: it is found, its two faces (parted
+    by 10 px of a seam, more than a grid cell) as one new MotionBit with no parent. The
+    same block beside a MotionBit, or where nothing was seen moving, is left to the other
+    rules."""
+    table = _table(3)
+    memory = Arrivals(table.shape[:2], COVERED, REST)
+    labels = np.zeros(table.shape[:2], np.int32)
+    memory.update(table, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
+    block = slice(40, 70), slice(50, 84)
+    moved = np.zeros(labels.shape, bool)
+    moved[block] = True
+    memory.update(table, np.zeros(labels.shape, bool), labels, moved)  # carried through
+    now = table.copy()
+    now[40:70, 50:62] = (190, 50, 40)  # the block's two faces
+    now[40:70, 72:84] = (150, 40, 30)
+    found = _find(memory, now)
+    assert [parent for _, _, parent in found] == [0, 0]  # two pieces, no MotionBit
+    out, held, born, _ = memory.place(labels.copy(), found, set(), 6, 100)
+    assert born == {100: 0} and set(np.unique(out).tolist()) == {0, 100}
+    assert (out[40:70, 50:62] == 100).mean() > 0.8 and (out[40:70, 72:84] == 100).mean() > 0.8
+    assert held.sum() < 1.1 * 720
+    beside = labels.copy()
+    beside[40:70, 85:90] = 5  # a MotionBit touching it: not alone
+    assert not _find(memory, now, beside)
+    fresh = Arrivals(table.shape[:2], COVERED, REST)  # nothing seen moving there
+    fresh.update(table, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
+    assert not _find(fresh, now)
 
 
 def test_a_shadow_left_behind_is_not_an_arrival():
@@ -106,7 +137,7 @@ def test_a_body_uncovered_a_strip_at_a_time_is_found_once_large_enough():
     # not taken into the static world while it waits (the carrier still hides the rest) ...
     labels = np.zeros(now.shape[:2], np.int32)
     labels[BLOCK[0], 57:80] = 7
-    memory.update(now, np.ones(now.shape[:2], bool), labels)
+    memory.update(now, np.ones(now.shape[:2], bool), labels, np.zeros(now.shape[:2], bool))
     now[BLOCK] = (190, 50, 40)  # ... so the whole block is found when it is uncovered
     (box, piece, _), = _find(memory, now)
     assert piece.sum() > 0.9 * 900
@@ -138,9 +169,10 @@ def test_the_rest_of_a_body_standing_beside_its_mark_joins_it(seen, moving, gap,
     table = _table()
     memory = Arrivals(table.shape[:2], COVERED, REST)
     labels = np.zeros(table.shape[:2], np.int32)
-    memory.update(table, np.ones(labels.shape, bool), labels)  # the table seen still
+    memory.update(table, np.ones(labels.shape, bool), labels,  # the table seen still
+                  np.zeros(labels.shape, bool))
     labels[80:110, 100:100 + seen // 30] = 7  # MotionBit 7 elsewhere, that large
-    memory.update(table, np.zeros(labels.shape, bool), labels)
+    memory.update(table, np.zeros(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     now = table.copy()
     now[BLOCK] = (190, 50, 40)  # the block stands there now, at rest
     now[40:70, 60 - gap:60] = table[40:70, 60 - gap:60]

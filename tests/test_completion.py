@@ -189,6 +189,35 @@ def test_the_scene_first_seen_is_kept_where_it_was_first_seen():
     assert not first.known[0, 0] and first.known.sum() == 15
 
 
+def test_a_mark_that_stands_as_first_seen_is_found_and_a_moved_body_is_not():
+    """Marks on a static block (parallax or smeared flow read it as moving) look as the
+    scene first seen; a block kicked over the table (its first look is the table there,
+    or itself two thirds of it, moved 20 px) and a mark the first look barely knows do
+    not."""
+    table = _table(5)
+    first_rgb = table.copy()
+    first_rgb[40:100, 40:100] = (30, 30, 160)  # a static block
+    first_rgb[140:200, 60:120] = (200, 200, 40)  # a block about to be kicked 20 px right
+    first = FirstLook((240, 320), covered=20.0)
+    known = np.ones((240, 320), bool)
+    known[140:200, 220:300] = False  # first seen under a hand, say
+    first.update(first_rgb, known, np.zeros((240, 320), np.int32))
+    now = table.copy()
+    now[40:100, 40:100] = (30, 30, 160)
+    now[140:200, 80:140] = (200, 200, 40)
+    now[150:190, 230:290] = (120, 60, 20)
+    labels = np.zeros((240, 320), np.int32)
+    labels[42:98, 42:98] = 4  # the static block
+    labels[140:200, 80:140] = 7  # the kicked block, where it stands now
+    labels[150:190, 230:290] = 9  # a body on pixels first seen under the hand
+    labels[10:30, 200:260] = 2  # a patch of the table
+    assert first.as_first_seen(labels, now).tolist() == [2, 4]
+    # a third of the kicked block changed: 20 of its 60 columns
+    moved = labels == 7
+    assert 0.3 < first.changed(now, (slice(0, 240), slice(0, 320)))[moved].mean() < 0.4
+    assert first.as_first_seen(np.zeros_like(labels), now).size == 0
+
+
 def test_a_top_face_mark_reaches_its_body_s_side_beyond_its_box(monkeypatch):
     """A mark on a block's top face (where the flow read its motion) is a small part of the
     block seen from above at an angle: its darker side runs on past the box the cut works
