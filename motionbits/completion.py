@@ -91,8 +91,8 @@ RECALL_LEVEL = 12
 #: knows at least this share of its pixels ...
 FIRST_SEEN_KNOWN = 0.5
 #: ... and at most this share of those look otherwise now (a static body marked through
-#: parallax or smeared flow; a block kicked 2 cm changes 16-24% of its first look, README
-#: "Marks as first seen").
+#: parallax or smeared flow; a block kicked 2 cm changes 16-24% of its first look; README
+#: "Marks that stand as first seen").
 FIRST_SEEN_CHANGED = 0.05
 
 

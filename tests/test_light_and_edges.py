@@ -267,7 +267,9 @@ def test_on_a_flat_table_a_dimmed_look_is_not_trimmed():
 def test_a_moving_shadow_leaves_no_mark_of_its_own(monkeypatch):
     """On the soft shadow sweeping a texture, no MotionBit shown after its first frames
     lies inside the shadow; without retiring cast shadows the marks shown still leave it
-    out (``trim_shadows``); without either, one mark lies in it."""
+    out (``trim_shadows``); without either, the shadow's mark is not shown as it stands
+    as first seen, darker (``FirstLook.as_first_seen``); without all three, one mark lies
+    in it."""
     clip = _shadow_clip()
 
     def inside_shadow() -> list[float]:
@@ -281,6 +283,8 @@ def test_a_moving_shadow_leaves_no_mark_of_its_own(monkeypatch):
     monkeypatch.setattr("motionbits.retirement.SHADOW_SHARE", 1.0)
     assert max(inside_shadow(), default=0.0) < 0.6
     monkeypatch.setattr("motionbits.segmenter.trim_shadows", lambda shown, shadows: shown)
+    assert max(inside_shadow(), default=0.0) < 0.6
+    monkeypatch.setattr(FirstLook, "as_first_seen", lambda self, labels, rgb: np.zeros(0, int))
     assert max(inside_shadow()) > 0.9
 
 
