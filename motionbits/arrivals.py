@@ -43,6 +43,7 @@ still there; a piece of such pixels that passes the tests above and touches no M
 is a new MotionBit of its own (its parts within one grid cell are one piece, and pieces
 found at one frame within ``JOIN_CELLS`` grid cells are one body). Such pieces do not
 wait. README "Moving cameras", round 33.
+
 Under a moving camera the memory follows the static world's model (homography and
 parallax) before each search.
 It is folded in with :class:`motionbits.revealed.StaticMemory`'s pixels seen still, so it
