@@ -157,8 +157,22 @@ class Arrivals:
             candidate[box] |= cv2.dilate(still[box].view(np.uint8),
                                          np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
         candidate &= self.known & (labels == 0)
+        # a body that no MotionBit followed (the flow read its motion, no cluster took it):
+        # seen moving since the static world was seen there, at rest now apart from every
+        # MotionBit; its pieces within JOIN_CELLS grid cells of each other are one body
+        unfollowed = self.stirred & self.known & (labels == 0) & ~candidate
+        searched = candidate | unfollowed
+        if not searched.any():
+            return []
+        # what looks unlike the remembered static world and stands still, once for both
+        # searches, on the box of their pixels (grown by the window's reach, so that its
+        # means are the whole image's)
+        around = grow_box(nonzero_box(searched), WINDOW // 2, labels.shape)
+        fresh = ((_color_difference(cur[around], self.background[around]) > self.covered)
+                 & (cv2.blur(cv2.absdiff(cur_gray[around], prev_gray[around]),
+                             (WINDOW, WINDOW)) < self.rest))
         found = []
-        for at, piece, ring in self._pieces(candidate, cur, cur_gray, prev_gray, labels, cell):
+        for at, piece, ring in self._pieces(candidate, fresh, around, cur, labels, cell):
             beside = ring[standing[ring]]
             body = int(np.bincount(beside).argmax()) if beside.size else 0
             visited = self.visited[at][piece]
@@ -169,35 +183,32 @@ class Arrivals:
             else:
                 continue
             found.append((at, piece, parent))
-        # a body that no MotionBit followed (the flow read its motion, no cluster took it):
-        # seen moving since the static world was seen there, at rest now apart from every
-        # MotionBit; its pieces within JOIN_CELLS grid cells of each other are one body
-        unfollowed = self.stirred & self.known & (labels == 0) & ~candidate
-        for at, piece, ring in self._pieces(unfollowed, cur, cur_gray, prev_gray, labels, cell,
+        for at, piece, ring in self._pieces(unfollowed, fresh, around, cur, labels, cell,
                                             unfollowed=True):
             if not ring.any():
                 found.append((at, piece, 0))
         return found
 
-    def _pieces(self, candidate: np.ndarray, cur: np.ndarray, cur_gray: np.ndarray,
-                prev_gray: np.ndarray, labels: np.ndarray, cell: tuple[float, float],
+    def _pieces(self, candidate: np.ndarray, fresh: np.ndarray, around: tuple[slice, slice],
+                cur: np.ndarray, labels: np.ndarray, cell: tuple[float, float],
                 unfollowed: bool = False
                 ) -> list[tuple[tuple[slice, slice], np.ndarray, np.ndarray]]:
         """The pieces of ``candidate`` ((H, W) bool) that look unlike the remembered static
-        world, stand still, are compact and large enough, and are neither the static world
-        under other light nor the surface around them continued (module docstring); those
-        still too small wait. For bodies no MotionBit followed (``unfollowed``), parts
-        within one grid cell of each other count as one piece, and nothing waits. Each as
-        (image box, (h, w) bool piece in it, (k,) int32 labels it touches)."""
+        world and stand still (``fresh``, (h, w) bool on the image box ``around``, which
+        holds the candidates' box grown by the window's reach), are compact and large
+        enough, and are neither the static world under other light nor the surface around
+        them continued (module docstring); those still too small wait. For bodies no
+        MotionBit followed (``unfollowed``), parts within one grid cell of each other count
+        as one piece, and nothing waits. Each as (image box, (h, w) bool piece in it, (k,)
+        int32 labels it touches)."""
         if not candidate.any():
             return []
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
         # everything below happens on the box of the candidates
-        # (grown by the window's reach, so that its means are the whole image's)
         box = grow_box(nonzero_box(candidate), WINDOW // 2, labels.shape)
-        changed = _color_difference(cur[box], self.background[box]) > self.covered
-        still = cv2.blur(cv2.absdiff(cur_gray[box], prev_gray[box]), (WINDOW, WINDOW)) < self.rest
-        mask = (candidate[box] & changed & still).view(np.uint8)
+        y0, x0 = box[0].start - around[0].start, box[1].start - around[1].start
+        mask = (candidate[box] & fresh[y0:y0 + box[0].stop - box[0].start,
+                                       x0:x0 + box[1].stop - box[1].start]).view(np.uint8)
         # a body uncovered a strip at a time grows a frame at a time: pieces too small or
         # too thin yet are not taken into the static world
         if not unfollowed:

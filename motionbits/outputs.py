@@ -17,7 +17,7 @@ from types import TracebackType
 
 from motionbits.errors import InputError
 
-__all__ = ["StagedFolder", "check_output_file", "write_text_atomic"]
+__all__ = ["StagedFolder", "check_named", "check_output_file", "write_text_atomic"]
 
 
 class StagedFolder:
@@ -42,9 +42,8 @@ class StagedFolder:
                  replaceable: set[str] | None = None) -> None:
         self.dest = Path(dest)
         self.option = option
-        if not os.fspath(dest).strip():  # Path("") is "."
-            raise InputError(f"{option} is empty; name the folder to write, e.g. {option} out")
-        if self.dest.name in ("", ".."):  # ".", "..", "/": no sibling to stage in, nothing to rename
+        check_named(dest, option, "folder")
+        if self.dest.name in ("", ".."):  # ".", "..", "/": no sibling to stage in
             raise InputError(f"{option} {self.dest} is the current folder, one above it or the "
                              f"root; name a folder of its own, e.g. {option} out")
         if self.dest.exists() and not self.dest.is_dir():
@@ -119,10 +118,16 @@ def _names(entries: list[str], limit: int = 3) -> str:
     return ", ".join(entries[:limit]) + more
 
 
+def check_named(path: str | os.PathLike, option: str, what: str) -> None:
+    """Raise InputError if ``path`` is empty or blank (``Path("")`` is the current
+    folder): ``what`` is "folder" or "file", for the message."""
+    if not os.fspath(path).strip():
+        raise InputError(f"{option} is empty; name the {what} to write")
+
+
 def check_output_file(path: str | os.PathLike, option: str) -> Path:
     """Fail early (before any work) if the file ``path`` could not be written later."""
-    if not os.fspath(path).strip():  # Path("") is "."; was: skipped, nothing written
-        raise InputError(f"{option} is empty; name the file to write")
+    check_named(path, option, "file")
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{option} {path} is a folder, not a file")

@@ -227,8 +227,9 @@ def iter_frames(source: FrameSource) -> Iterator[np.ndarray]:
         if source.ndim == 3 and source.shape[2] in (3, 4) and min(source.shape[:2]) >= 8:
             # read as T greyscale frames 3 or 4 px wide (was: "frame 0 is too small ...")
             raise ValueError(
-                f"an array of frames of shape {source.shape} reads as {source.shape[0]} greyscale "
-                f"frames {source.shape[2]} px wide; if it is one RGB frame, pass [frame] or frame[None]")
+                f"an array of frames of shape {source.shape} reads as {source.shape[0]} "
+                f"greyscale frames {source.shape[2]} px wide; if it is one RGB frame, pass "
+                "[frame] or frame[None]")
         for i in range(source.shape[0]):
             yield as_rgb_frame(source[i], name=f"frame {i}")
         return

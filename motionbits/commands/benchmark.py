@@ -112,13 +112,13 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"method {name!r} cannot be built: {exc}") from exc
     if args.json is not None:
         check_output_file(args.json, "--json")
+    save = args.save_pred is not None  # "" is refused, not skipped
     staged = (StagedFolder(args.save_pred, overwrite=args.overwrite, option="--save-pred",
-                           replaceable=set(known)) if args.save_pred is not None else nullcontext())
+                           replaceable=set(known)) if save else nullcontext())
     with staged:  # predictions appear at --save-pred only if the whole run succeeded
-        results, spf = run_benchmark(args.data, methods,
-                                     save_pred=staged.path if args.save_pred is not None else None,
+        results, spf = run_benchmark(args.data, methods, save_pred=staged.path if save else None,
                                      max_scenes=args.max_scenes, progress=not args.quiet)
-        if args.save_pred is not None:
+        if save:
             staged.publish()
     print(format_table(results, block="macro", seconds_per_frame=spf), end="")
     if args.pooled:

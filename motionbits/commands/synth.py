@@ -7,7 +7,7 @@ import contextlib
 from pathlib import Path
 
 from motionbits.errors import InputError
-from motionbits.outputs import StagedFolder
+from motionbits.outputs import StagedFolder, check_named
 
 __all__ = ["register", "run"]
 
@@ -62,8 +62,7 @@ def _size(text: str) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     w, h = _size(args.size)
-    if not args.out.strip():  # Path("") is "." (was: wrote ./<track>, said "wrote /<track>")
-        raise InputError("--out is empty; name the folder to write, e.g. --out data")
+    check_named(args.out, "--out", "folder")  # else ./<track>
     if Path(args.out).exists() and not Path(args.out).is_dir():
         raise InputError(f"--out {args.out} is a file, not a folder")
     if args.scenes < 1:
