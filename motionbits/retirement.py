@@ -12,17 +12,18 @@ it never moved: it is retired.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_areas, label_boxes, run_counts
+from motionbits.boxes import grow_box, label_areas, label_boxes, nonzero_box, run_counts
 from motionbits.masks import drop_labels
 from motionbits.revealed import StaticMemory
 from motionbits.twists import rigid_matrix
 
-__all__ = ["Origin", "origin_residuals", "moved_evidence", "retire", "retire_shadows"]
+__all__ = ["APART_CELLS", "Origin", "origin_residuals", "moved_once", "retire", "retire_shadows"]
 
 #: px: below this median distance between where a MotionBit's own and the world's
 #: accumulated motions put its pixels, the two cannot be told apart (no verdict).
@@ -41,6 +42,9 @@ SHADOW_AGE = 5
 #: frame) reads as one only once it has moved onto wall seen lit. On seeds 0 and 11 (70 +
 #: 60 robot / hand scenes) an arm's dark link read up to 0.38, wall shadows 0.5-0.6.
 OLD_SHADOW_SHARE = 0.5
+#: Grid cells around a MotionBit born at the last frame, now at rest, within which no
+#: MotionBit may move for its one frame of motion to stand (:func:`moved_once`).
+APART_CELLS = 7.5
 
 
 @dataclass
@@ -109,13 +113,50 @@ def origin_residuals(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
             _residual(origin.frame, origin.body, cur_gray, box, inside))
 
 
-def moved_evidence(origin: Origin, cur_gray: np.ndarray, mask: np.ndarray,
-                   min_separation: float, corner: tuple[int, int] = (0, 0)) -> float:
-    """Grey levels by which the MotionBit's own accumulated motion explains its pixels
-    ``mask`` (bool) in ``cur_gray`` better than the static world's motion does
-    (negative: it never moved); NaN and ``corner`` as in :func:`origin_residuals`."""
-    world, body = origin_residuals(origin, cur_gray, mask, min_separation, corner)
-    return world - body
+def moved_once(origins: dict[int, Origin], ids: Iterable[int], labels: np.ndarray,
+               valid: np.ndarray, busy: np.ndarray, cam: np.ndarray | None,
+               cur_gray: np.ndarray, reach: int, margin: float, explained: float
+               ) -> set[int]:
+    """Of the MotionBits ``ids`` born at the last frame that do not move now, those whose
+    one frame of motion was a body's: no MotionBit moves within ``reach`` px of their
+    pixels now (``busy``), and their pixels (``labels == i`` where ``valid``) are
+    explained by their own motion since the frame before their birth (mean residual
+    within ``explained``), better by more than ``margin`` grey levels than by the static
+    world's, which does not explain them -- :func:`retire`'s test, the other way round.
+
+    A block knocked across the table moves for a frame or two and stops; a MotionBit born
+    the frame before in a moving agent's wake, or a piece of the agent, stands beside the
+    agent, and the world explains a flicker of the flow.
+
+    Args:
+        origins: id -> its :class:`Origin` at the last frame (not changed here).
+        ids: the candidate ids.
+        labels: (H, W) int32 label map carried from the last frame.
+        valid: (H, W) bool, where the carried labels hold.
+        busy: (H, W) bool, the pixels of the MotionBits that move now (their nodes').
+        cam: (3, 3) camera motion of this frame (current -> previous) or None (static).
+        cur_gray: (H, W) float32 current grey frame.
+        reach: px.
+        margin, explained: grey levels (config ``retire_margin``, ``carry_tolerance``).
+
+    Returns:
+        The ids whose motion stands.
+    """
+    world = np.eye(3) if cam is None else cam
+    moved = set()
+    for i in ids:
+        origin = origins.get(int(i))
+        mask = (labels == i) & valid
+        box = nonzero_box(mask)
+        if origin is None or box[0].start == box[0].stop or busy[grow_box(box, reach,
+                                                                           mask.shape)].any():
+            continue
+        # it stands still now: both accumulated motions advance by the world's
+        at_rest = Origin(origin.frame, origin.body @ world, origin.world @ world)
+        world_res, body_res = origin_residuals(at_rest, cur_gray, mask, MIN_SEPARATION)
+        if world_res > explained > body_res and world_res - body_res > margin:
+            moved.add(int(i))
+    return moved
 
 
 def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,

@@ -47,7 +47,7 @@ from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
 from motionbits.resting import RestingMarks
-from motionbits.retirement import Origin, retire, retire_shadows
+from motionbits.retirement import APART_CELLS, Origin, moved_once, retire, retire_shadows
 from motionbits.revealed import StaticMemory, carry_at_rest
 from motionbits.setdown import SetDown
 from motionbits.shadows import cast_shadows, trim_shadows
@@ -407,7 +407,16 @@ class MotionBitsSegmenter:
             carried_ids = prior[carried]
             kept = np.setdiff1d(np.flatnonzero(run_counts(
                 carried_ids[prior_valid[carried] & (carried_ids > 0)])), ids)
-            kept = kept[~np.isin(kept, list(unconfirmed))]  # born last frame, not moving now
+            moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
+            # born last frame and not moving now: gone, unless that frame's motion was a
+            # body's (a block knocked across the table stops within a frame or two)
+            stopped = kept[np.isin(kept, list(unconfirmed))]
+            if len(stopped):
+                busy = grid.to_image(np.isin(node_ids, list(moving)).view(np.uint8)) > 0
+                kept = np.setdiff1d(kept, np.setdiff1d(stopped, list(moved_once(
+                    self._origins, stopped, prior, prior_valid, busy, cam, cur_g,
+                    int(round(APART_CELLS * max(grid.cell))), cfg.retire_margin,
+                    cfg.carry_tolerance))))
             carried_earned = earned
             speed = cv2.magnitude(flow_m[..., 0], flow_m[..., 1])  # (h, w) px the pixel moves
             labels, earned = assign_pixels(
@@ -425,7 +434,6 @@ class MotionBitsSegmenter:
             cw, ch = grid.cell
             speck_area = int(np.ceil(SPECK_CELLS * cw * ch))
             labels = remove_specks(labels, min_area=speck_area)
-            moving = moving_ids(pts, node_ids, ids, thetas, trans, cfg.move_threshold)
             # a stopped body that something passed in front of: its pixels, seen again as
             # they looked when it stood still, take its id back
             labels, back = self._memory.restore(labels, revealed, list(moving))

@@ -265,3 +265,20 @@ def test_a_block_carried_hidden_is_shown_the_frame_it_is_found(seed):
     ids, counts = np.unique(result.labels[block], return_counts=True)
     counts[ids == 0] = 0
     assert counts.max() >= 0.5 * block.sum(), (ids, counts)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_block_knocked_for_one_frame_keeps_its_motionbit(seed):
+    """A block knocked 10 px at the first frame, at rest from then on: the MotionBit born
+    with that one frame of motion stands (its motion explains what stands there), though
+    it never moves again and the table under it was never seen; the static body gets none."""
+    block = Polygon.rect(100, 90, 140, 130, texture_seed=3)
+    still = Polygon.regular(260, 200, 22, 5, texture_seed=8)
+    clip = render_planar_clip([Body((block,), velocity=(10.0, 0.0), start=0, stop=1),
+                               Body((still,))], size=SIZE, n_frames=10, seed=seed)
+    last = list(segment_video(clip.frames, CONFIG))[-1]
+    body = clip.labels[-1] == 1
+    ids, counts = np.unique(last.labels[body], return_counts=True)
+    counts[ids == 0] = 0
+    assert counts.max() >= 0.9 * body.sum(), (ids, counts)
+    assert (last.labels[~body] > 0).mean() < 0.01

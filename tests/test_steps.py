@@ -1,6 +1,7 @@
 """Unit tests of the per-frame step functions that the segmenter calls in order."""
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
 from motionbits.camera import compensate_camera
@@ -11,7 +12,7 @@ from motionbits.nodes import NodeGrid
 from motionbits.propagation import propagate_components
 from motionbits.records import (MotionSpans, _area_centroid, build_result, group_map, moving_ids,
                                 twist_sources)
-from motionbits.retirement import retire
+from motionbits.retirement import Origin, moved_once, retire
 from motionbits.twists import nodes_to_fit
 
 
@@ -118,6 +119,26 @@ def test_retire_drops_a_motionbit_whose_pixels_did_not_move():
     out, origins = retire(labels, {}, ids, thetas, trans, 1, None, prev, moved, 5.0)
     np.testing.assert_array_equal(out, labels)
     assert set(origins) == {1}
+
+
+@pytest.mark.parametrize("moved, busy, stands", [
+    (True, False, True),    # its one frame of motion explains what stands there now
+    (False, False, False),  # nothing moved there: a flicker of the flow
+    (True, True, False),    # a MotionBit moves beside it: a piece of that one, left behind
+])
+def test_moved_once_keeps_a_newborn_whose_one_frame_of_motion_was_real(moved, busy, stands):
+    rng = np.random.default_rng(2)
+    before = rng.uniform(0, 255, (80, 80)).astype(np.float32)
+    now = np.roll(before, 6, axis=1) if moved else before.copy()  # 6 px to the right
+    labels = np.zeros((80, 80), np.int32)
+    labels[30:50, 30:50] = 4
+    # born at the last frame with a 6 px motion (current -> previous: 6 px to the left)
+    origin = Origin(before, np.array([[1.0, 0, -6.0], [0, 1.0, 0], [0, 0, 1.0]]), np.eye(3))
+    near = np.zeros((80, 80), bool)
+    near[30:50, 60:70] = busy
+    out = moved_once({4: origin}, [4], labels, np.ones((80, 80), bool), near, None, now,
+                     reach=12, margin=5.0, explained=12.0)
+    assert out == ({4} if stands else set())
 
 
 def test_compensate_camera_removes_a_global_shift():
