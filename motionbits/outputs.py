@@ -43,7 +43,9 @@ class StagedFolder:
         self.dest = Path(dest)
         self.option = option
         check_named(dest, option, "folder")
-        if self.dest.name in ("", ".."):  # ".", "..", "/": no sibling to stage in
+        here = Path.cwd().resolve()
+        if self.dest.name in ("", "..") or self.dest.resolve() in (here, *here.parents):
+            # ".", "..", "/", the current folder by its path: no sibling to stage in
             raise InputError(f"{option} {self.dest} is the current folder, one above it or the "
                              f"root; name a folder of its own, e.g. {option} out")
         if self.dest.exists() and not self.dest.is_dir():

@@ -7,7 +7,7 @@ letter in the letter style):
 form                  examples
 ====================  ===============================================================
 square brackets       ``[3]``, ``[3, 5]``, ``[3][5]``, ``[3 and 5]``, ``[mark 3]``,
-                      ``[#3]``; letter style ``[a]``, ``[a, c]``, ``[a][b]``; also the
+                      ``[#3]``, nested ``[3, [5]]``; letter style ``[a]``, ``[a, c]``, ``[a][b]``; also the
                       full-width ``［3］`` and the CJK ``【3】``, ``〔3〕``, ``【3、5】``
 round brackets        ``(3)``, ``(3, 5)`` (at most 3 digits), full-width ``（3）``;
                       letter style ``(a)``
@@ -71,9 +71,12 @@ _NUM3 = r"\d{1,3}(?!\d|\.\d)"
 _NUM_KW = rf"{_NUM}(?!\s*{_UNIT})"
 _LET = r"[A-Za-z]{1,2}(?![A-Za-z0-9])"
 
+# a mark inside a bracketed list may sit in brackets of its own (JSON: ``[3, [5]]``)
+_ITEM = rf"(?:{_OPEN}\s*)?(?:{_KW}\s*)?#?{_NUM}(?:\s*{_CLOSE})?"
+
 _PATTERNS: dict[str, list[re.Pattern]] = {
     "number": [
-        re.compile(rf"{_OPEN}\s*(?:{_KW}\s*)?#?({_NUM}(?:{_SEP}(?:{_KW}\s*)?#?{_NUM})*)\s*{_CLOSE}"),
+        re.compile(rf"{_OPEN}\s*({_ITEM}(?:{_SEP}{_ITEM})*)\s*{_CLOSE}"),
         re.compile(rf"{_ROPEN}\s*#?({_NUM3}(?:{_SEP}#?{_NUM3})*)\s*{_RCLOSE}"),
         re.compile(rf"\b{_KW}\s*(?:#\s?|(?i:no\.?|nr\.?|number)\s*)?({_NUM_KW}(?:{_SEP}#?{_NUM_KW})*)"),
         re.compile(r"(?<![\w&#/])#\s?(\d{1,4})(?![\d\w]|\.\d)"),

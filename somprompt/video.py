@@ -34,6 +34,10 @@ __all__ = [
 
 
 def _target_size(h: int, w: int, max_side: int | None) -> tuple[int, int]:
+    if max_side is not None and (isinstance(max_side, bool)
+                                 or not isinstance(max_side, (int, np.integer))):
+        raise TypeError(f"max_side must be a whole number of pixels or None, got "
+                        f"{type(max_side).__name__} {max_side!r}")
     if max_side is None or max(h, w) <= max_side:
         return w, h
     if max_side < 1:

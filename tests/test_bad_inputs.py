@@ -578,6 +578,8 @@ CASES: list[Case] = [
          "--out is empty"),  # was: "--out . already holds files", or errno 16 in an empty folder
     Case("segment/out-current-folder", in_tmp(cli(S, "{a}/one", "--out", ".", *SEG)), CLEAR,
          "is the current folder"),  # was: "[Errno 16] Device or resource busy: '.' -> '..partial-...old'"
+    Case("segment/out-current-folder-by-path", in_tmp(cli(S, "{a}/one", "--out", "{t}", *SEG)), CLEAR,
+         "is the current folder"),  # was: replaced the (empty) current folder with the output
     # ---- segment: options (checked before any frame)
     Case("segment/every-0", cli(S, "{a}/frames", "--out", "{t}/out", "--every", "0"), CLEAR, "--every", absent=("out",)),
     Case("segment/every-negative", cli(S, "{a}/frames", "--out", "{t}/out", "--every", "-2"), CLEAR, "--every", absent=("out",)),
@@ -825,6 +827,12 @@ CASES: list[Case] = [
     Case("somprompt/parse-5-digit-list", api(lambda t: _parse("objects 3, 12345 and 5", _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3, 5] and o.value.unknown == ["12345"]),
     Case("somprompt/parse-none", api(lambda t: _parse(None)), CLEAR, "str"),
+    Case("somprompt/parse-nested-list", api(lambda t: _parse("The moved ones: [3, [5]]", _LAB)), CORRECT,
+         check=lambda o, t: o.value.ids == [3, 5]),  # was: [5] only
+    Case("somprompt/resize-max-side-float", api(lambda t: __import__("somprompt").resize_max_side(
+        np.zeros((40, 60, 3), np.uint8), 30.5)), CLEAR, "max_side must be a whole number"),  # was: resized
+    Case("somprompt/resize-max-side-bool", api(lambda t: __import__("somprompt").resize_max_side(
+        np.zeros((40, 60, 3), np.uint8), True)), CLEAR, "max_side must be a whole number"),  # was: 1x1 px
     Case("somprompt/parse-5000-digit-mark", api(lambda t: _parse("[" + "9" * 5000 + "] and [3]", _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3] and o.value.unknown == ["9" * 5000]),  # was: int() digit limit
     Case("somprompt/parse-5000-digit-no-labels", api(lambda t: _parse("mark 0" + "7" * 5000)), CORRECT,
