@@ -139,7 +139,12 @@ class MotionBitsSegmenter:
     """
 
     def __init__(self, config: MotionBitsConfig | None = None, flow: FlowBackend | None = None):
-        self.config = config or MotionBitsConfig()
+        if config is not None and not isinstance(config, MotionBitsConfig):
+            # else "'dict' object has no attribute 'flow'" (and {} quietly meant the defaults)
+            hint = "; use MotionBitsConfig(**config)" if isinstance(config, dict) else ""
+            raise TypeError(f"config must be a MotionBitsConfig or None, got "
+                            f"{type(config).__name__}{hint}")
+        self.config = config if config is not None else MotionBitsConfig()
         self.flow = make_flow(flow if flow is not None else self.config.flow)
         self._ops = make_ops(self.config.backend)  # twist fits, propagation, MCL
         self.refiner = None  # optional post-step on each frame's labels (config.refine)

@@ -16,6 +16,7 @@ The constructor arguments are the style (palette, opacity, thickness, text scale
 
 from __future__ import annotations
 
+import numbers
 from typing import Mapping
 
 import cv2
@@ -51,6 +52,22 @@ def _prepare(
         if missing:
             registry.register(missing)
     return img, regions, registry
+
+
+#: OpenCV's largest line width (``MAX_THICKNESS`` in drawing.cpp); beyond it cv2 asserts.
+MAX_THICKNESS = 32767
+
+
+def _check_thickness(thickness: int) -> int:
+    """``thickness`` as an int in [1, MAX_THICKNESS] (2.7 would otherwise draw 2 px, 10**9
+    fail in OpenCV's "thickness <= MAX_THICKNESS" assertion, inf overflow)."""
+    if (isinstance(thickness, (bool, np.bool_)) or not isinstance(thickness, numbers.Real)
+            or not (isinstance(thickness, numbers.Integral) or float(thickness).is_integer())):
+        raise TypeError(f"thickness must be a whole number of pixels, got "
+                        f"{type(thickness).__name__} {thickness!r}")
+    if not 1 <= thickness <= MAX_THICKNESS:
+        raise ValueError(f"thickness must be in [1, {MAX_THICKNESS}] pixels, got {thickness!r:.40}")
+    return int(thickness)
 
 
 def auto_text_scale(shape: tuple[int, int]) -> float:
@@ -139,9 +156,7 @@ class ContourAnnotator(_Annotator):
 
     def __init__(self, palette: ColorPalette | None = None, thickness: int = 2) -> None:
         super().__init__(palette)
-        if int(thickness) < 1:
-            raise ValueError(f"thickness must be >= 1, got {thickness}")
-        self.thickness = int(thickness)
+        self.thickness = _check_thickness(thickness)
 
     def _draw(self, img: np.ndarray, regions: LabelRegions, registry: MarkRegistry) -> None:
         for reg in regions:
@@ -170,9 +185,7 @@ class BoxAnnotator(_Annotator):
 
     def __init__(self, palette: ColorPalette | None = None, thickness: int = 2) -> None:
         super().__init__(palette)
-        if int(thickness) < 1:
-            raise ValueError(f"thickness must be >= 1, got {thickness}")
-        self.thickness = int(thickness)
+        self.thickness = _check_thickness(thickness)
 
     def _draw(self, img: np.ndarray, regions: LabelRegions, registry: MarkRegistry) -> None:
         for reg in regions:

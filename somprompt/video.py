@@ -7,7 +7,7 @@ import numbers
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import Iterable, Sequence
 
 import cv2
 import numpy as np
@@ -118,6 +118,26 @@ def _check_lengths(frames: Sequence, label_maps: Sequence) -> None:
         )
 
 
+def _check_frame_indices(indices: Sequence[int], n: int) -> list[int]:
+    """``indices`` as ints >= 0, one per frame ([0, 0.5] was kept as given in
+    ``MarkedVideo.frame_indices`` but recorded as frame 0 by the registry)."""
+    if isinstance(indices, (str, bytes)) or not isinstance(indices, Iterable):
+        raise TypeError(f"frame_indices must be a sequence of frame numbers, got "
+                        f"{type(indices).__name__} {indices!r:.40}")
+    out = []
+    for i in indices:
+        if (isinstance(i, (bool, np.bool_)) or not isinstance(i, numbers.Real)
+                or not (isinstance(i, numbers.Integral) or float(i).is_integer())):
+            raise TypeError(f"frame_indices must hold whole frame numbers, got "
+                            f"{type(i).__name__} {i!r:.40}")
+        if i < 0:
+            raise ValueError(f"frame_indices must be >= 0, got {i}")
+        out.append(int(i))
+    if len(out) != n:
+        raise ValueError(f"got {len(out)} frame indices for {n} frames")
+    return out
+
+
 @dataclass
 class MarkedVideo:
     """Frames with marks, and what the marks mean.
@@ -181,8 +201,8 @@ def mark_video(
     _check_lengths(frames, label_maps)
     if frame_indices is None:
         frame_indices = list(range(len(frames)))
-    elif len(frame_indices) != len(frames):
-        raise ValueError(f"got {len(frame_indices)} frame indices for {len(frames)} frames")
+    else:
+        frame_indices = _check_frame_indices(frame_indices, len(frames))
     renderer = renderer if renderer is not None else SetOfMarkRenderer()
     registry = registry if registry is not None else MarkRegistry(style)
     checked = []

@@ -739,6 +739,8 @@ CASES: list[Case] = [
     Case("api/config-with-bad", api(lambda t: _config().with_(k_neighbors=0)), CLEAR, "k_neighbors"),
     Case("api/config-numpy-int", api(lambda t: _config(n_nodes=np.int64(900))), CORRECT,
          check=lambda o, t: o.value.n_nodes == 900),
+    Case("api/segmenter-config-dict", api(lambda t: _segment(_F[:1], {"n_nodes": 400})), CLEAR,
+         "config must be a MotionBitsConfig"),  # was: "'dict' object has no attribute 'flow'"
     # ---- motionbits API: frames and flow
     Case("api/max_side-huge-small-input", api(lambda t: _work_size((120, 160), _config(max_side=16384))),
          CORRECT, check=lambda o, t: o.value == ((120, 160), (480, 640))),  # up to 640 only
@@ -805,6 +807,11 @@ CASES: list[Case] = [
         -np.ones((5, 5), int), np.zeros((5, 5), int))), CLEAR, "negative"),
     Case("eval-api/huge-ids", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
         _LAB * 10**12, _LAB)), CORRECT, check=lambda o, t: o.value.f1.tolist() == [1.0, 1.0]),
+    Case("eval-api/ari-shape-mismatch", api(lambda t: __import__("motionbits.eval").eval.adjusted_rand_index(
+        np.zeros((10, 40), int), _LAB)), CLEAR, "differ in shape"),  # was: 0.0 (same size, compared pixel by pixel)
+    Case("eval-api/write-label-map-jpg", api(lambda t: __import__("motionbits.eval").eval.write_label_map(
+        t / "gt.jpg", _LAB * 1000)), CLEAR, "must end in .png",
+        absent=("gt.jpg",)),  # was: wrote an 8-bit JPEG (ids 3000 and 5000 read back as 255)
     # ---- somprompt
     Case("somprompt/draw-70000-ids", api(lambda t: _draw(_many_ids(70_000))), CORRECT,
          check=lambda o, t: (len(o.value.placements) == 256 and len(o.value.dropped) == 70_000 - 256
@@ -815,6 +822,8 @@ CASES: list[Case] = [
          check=lambda o, t: sorted(o.value.placements) == [3, 5] and not o.value.dropped),
     Case("somprompt/max-marks-0", api(lambda t: _draw(_LAB, max_marks=0)), CLEAR, "max_marks"),
     Case("somprompt/draw-shape-mismatch", api(lambda t: _draw(_LAB, shape=(30, 30))), CLEAR, "labels"),
+    Case("somprompt/thickness-huge", api(lambda t: _draw(_LAB, thickness=10**9)), CLEAR,
+         "thickness must be in [1, 32767]"),  # was: OpenCV's "thickness <= MAX_THICKNESS" assertion
     Case("somprompt/draw-uint64-huge-ids", api(lambda t: _draw(np.where(_LAB > 0, np.uint64(2**63 + 5), np.uint64(0)))),
          CLEAR, "too large for int64"),  # was: "holds negative ids (min -9223372036854775803)"
     Case("api/check-label-map-uint64-huge", api(lambda t: __import__("motionbits.objects").objects.check_label_map(
@@ -847,6 +856,9 @@ CASES: list[Case] = [
          "ids must be"),
     Case("somprompt/masks-for-ids-fraction", api(lambda t: __import__("somprompt").masks_for_ids(_LAB, [3.7])),
          CLEAR, "integer object ids"),  # was: the mask of 3
+    Case("somprompt/mark-video-frame-indices-fraction", api(lambda t: __import__("somprompt").mark_video(
+        [_F[0][:20, :20]] * 2, [_LAB] * 2, frame_indices=[0, 0.5])), CLEAR,
+        "whole frame numbers"),  # was: kept as [0, 0.5]; the registry recorded the second frame as frame 0
     Case("somprompt/write-mp4-to-folder", api(lambda t: __import__("somprompt").write_mp4(list(_F), t)), CLEAR,
          "is a folder"),  # was: PyAV's "Could not determine output format"
     Case("somprompt/write-mp4-wrong-suffix", api(lambda t: __import__("somprompt").write_mp4(list(_F), t / "v.avi")),
@@ -909,6 +921,8 @@ CASES: list[Case] = [
     Case("vlm/checkpoint-empty", api(lambda t: __import__("vlm_adapters").Qwen2_5_VLAdapter.from_pretrained("")),
          CLEAR, "checkpoint folder"),  # was: '' passed on as a hub id
     Case("vlm/frames-empty", api(lambda t: _stub_generate([])), CLEAR, "empty"),
+    Case("vlm/encode-max-side-0", api(lambda t: __import__("vlm_adapters.openai_compat").openai_compat.encode_image_data_url(
+        Image.new("RGB", (64, 48)), max_side=0)), CLEAR, "max_side must be"),  # was: a 1x1 px image
 ]
 # --------------------------------------------------------------------------- tests
 

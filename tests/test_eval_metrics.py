@@ -247,5 +247,5 @@ def test_adjusted_rand_index_hand_computed():
     assert ari(a, b) == pytest.approx(1.2 / 3.7)
     assert ari(np.zeros(5), np.zeros(5)) == 1.0
     assert ari(np.zeros(4), np.arange(4)) == 0.0
-    with pytest.raises(ValueError, match="differ in size"):
+    with pytest.raises(ValueError, match="differ in shape"):
         ari(a, b[:4])

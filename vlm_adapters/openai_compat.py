@@ -34,8 +34,11 @@ def encode_image_data_url(image: Any, image_format: str = "png", max_side: int |
     Args:
         image: an RGB PIL image.
         image_format: ``"png"`` (lossless: set-of-mark numbers stay crisp) or ``"jpeg"`` (smaller).
-        max_side: downscale so the longer side is at most this many pixels (None: keep size).
+        max_side: downscale so the longer side is at most this many pixels, >= 1 (None: keep size).
     """
+    if max_side is not None and (isinstance(max_side, bool) or not isinstance(max_side, numbers.Integral)
+                                 or max_side < 1):  # else 0 or -3 sent a 1x1 image
+        raise ValueError(f"max_side must be None or an int >= 1, got {max_side!r}")
     if max_side is not None and max(image.size) > max_side:
         scale = max_side / max(image.size)
         image = image.resize((max(1, round(image.size[0] * scale)), max(1, round(image.size[1] * scale))))

@@ -28,9 +28,11 @@ def adjusted_rand_index(a: np.ndarray, b: np.ndarray) -> float:
     Returns:
         ARI in [-1, 1].
     """
-    a, b = np.asarray(a).ravel(), np.asarray(b).ravel()
-    if a.shape != b.shape:
-        raise ValueError(f"label arrays differ in size: {a.size} vs {b.size}")
+    a, b = np.asarray(a), np.asarray(b)
+    if a.shape != b.shape:  # else a (10, 40) and a (20, 20) map were compared pixel by pixel
+        raise ValueError(f"label arrays differ in shape: {a.shape} vs {b.shape}; they must "
+                         "label the same items")
+    a, b = a.ravel(), b.ravel()
     n = a.size
     if n < 2:
         return 1.0

@@ -80,11 +80,22 @@ def read_label_map(path: str | os.PathLike) -> np.ndarray:
 
 
 def write_label_map(path: str | os.PathLike, labels: np.ndarray) -> None:
-    """Write an (H, W) label map with labels in 0..65535 as a 16-bit grayscale PNG."""
+    """Write an (H, W) label map with labels in 0..65535 as a 16-bit grayscale PNG.
+
+    Raises:
+        IsADirectoryError: ``path`` is a folder.
+        ValueError: ``path`` does not end in ``.png`` (a JPEG or BMP would keep 8 bits, lossily),
+            or labels beyond 65535.
+    """
     labels = check_label_map(np.asarray(labels), name=f"label map for {path}")
     if labels.size and labels.max() > 65535:
         raise ValueError(f"labels up to {labels.max()} do not fit a 16-bit PNG (max 65535)")
     path = Path(path)
+    if path.is_dir():  # else OpenCV's "could not find a writer for the specified extension"
+        raise IsADirectoryError(f"{path} is a folder; pass the PNG file to write, e.g. {path / 'gt.png'}")
+    if path.suffix.lower() != ".png":  # OpenCV wrote .jpg / .bmp as 8 bits: ids above 255 lost
+        raise ValueError(f"{path}: a label map is written as a 16-bit PNG and must end in .png, "
+                         f"got {path.suffix or 'no suffix'!r}")
     path.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(path), labels.astype(np.uint16)):
         raise ValueError(f"could not write {path} (is the suffix .png?)")
