@@ -68,8 +68,8 @@ def parse_mark_text(text: str, style: MarkStyle = "number") -> int | None:
     raise ValueError(f"unknown mark style {style!r}; use one of {_STYLES}")
 
 
-def whole_ids(values: Iterable, name: str) -> list[int]:
-    """``values`` as ints, in order.
+def whole_ids(values: Iterable, name: str, what: str = "object ids") -> list[int]:
+    """``values`` as ints, in order (``what`` they are, for the messages).
 
     Raises:
         TypeError: ``values`` is not an iterable (or is a str), or holds anything but whole
@@ -77,13 +77,13 @@ def whole_ids(values: Iterable, name: str) -> list[int]:
             ``[3.7]`` would otherwise read as 1 or 3.
     """
     if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
-        raise TypeError(f"{name} must be an iterable of object ids, got "
+        raise TypeError(f"{name} must be an iterable of {what}, got "
                         f"{type(values).__name__} {values!r:.40}")
     ids = []
     for i in values:
         if (isinstance(i, (bool, np.bool_)) or not isinstance(i, numbers.Real)
                 or not isinstance(i, numbers.Integral) and not float(i).is_integer()):
-            raise TypeError(f"{name} must hold integer object ids (whole numbers), got "
+            raise TypeError(f"{name} must hold integer {what} (whole numbers), got "
                             f"{type(i).__name__} {i!r:.40}")
         ids.append(int(i))
     return ids

@@ -7,7 +7,7 @@ import numbers
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Sequence
 
 import cv2
 import numpy as np
@@ -18,7 +18,7 @@ from motionbits.frames import sample_frame_indices
 from .anchors import LabelPlacement
 from .inputs import ImageLike, as_rgb_array, check_label_map, like_input
 from .metadata import MarkInfo, describe_marks, marks_to_json
-from .registry import MarkRegistry, MarkStyle
+from .registry import MarkRegistry, MarkStyle, whole_ids
 from .render import SetOfMarkRenderer
 
 __all__ = [
@@ -121,18 +121,9 @@ def _check_lengths(frames: Sequence, label_maps: Sequence) -> None:
 def _check_frame_indices(indices: Sequence[int], n: int) -> list[int]:
     """``indices`` as ints >= 0, one per frame ([0, 0.5] was kept as given in
     ``MarkedVideo.frame_indices`` but recorded as frame 0 by the registry)."""
-    if isinstance(indices, (str, bytes)) or not isinstance(indices, Iterable):
-        raise TypeError(f"frame_indices must be a sequence of frame numbers, got "
-                        f"{type(indices).__name__} {indices!r:.40}")
-    out = []
-    for i in indices:
-        if (isinstance(i, (bool, np.bool_)) or not isinstance(i, numbers.Real)
-                or not (isinstance(i, numbers.Integral) or float(i).is_integer())):
-            raise TypeError(f"frame_indices must hold whole frame numbers, got "
-                            f"{type(i).__name__} {i!r:.40}")
-        if i < 0:
-            raise ValueError(f"frame_indices must be >= 0, got {i}")
-        out.append(int(i))
+    out = whole_ids(indices, "frame_indices", "frame numbers")
+    if any(i < 0 for i in out):
+        raise ValueError(f"frame_indices must be >= 0, got {min(out)}")
     if len(out) != n:
         raise ValueError(f"got {len(out)} frame indices for {n} frames")
     return out

@@ -858,7 +858,7 @@ CASES: list[Case] = [
          CLEAR, "integer object ids"),  # was: the mask of 3
     Case("somprompt/mark-video-frame-indices-fraction", api(lambda t: __import__("somprompt").mark_video(
         [_F[0][:20, :20]] * 2, [_LAB] * 2, frame_indices=[0, 0.5])), CLEAR,
-        "whole frame numbers"),  # was: kept as [0, 0.5]; the registry recorded the second frame as frame 0
+        "must hold integer frame numbers"),  # was: kept as [0, 0.5]; the registry recorded the second frame as frame 0
     Case("somprompt/write-mp4-to-folder", api(lambda t: __import__("somprompt").write_mp4(list(_F), t)), CLEAR,
          "is a folder"),  # was: PyAV's "Could not determine output format"
     Case("somprompt/write-mp4-wrong-suffix", api(lambda t: __import__("somprompt").write_mp4(list(_F), t / "v.avi")),
