@@ -98,8 +98,8 @@ def sample_frame_indices(num_total: int, num_frames: int | None) -> list[int]:
         >>> sample_frame_indices(10, 4), sample_frame_indices(10, 1)
         ([0, 3, 6, 9], [9])
     """
-    num_total = _whole("num_total", num_total)
-    num_frames = None if num_frames is None else _whole("num_frames", num_frames)
+    num_total = whole_number("num_total", num_total)
+    num_frames = None if num_frames is None else whole_number("num_frames", num_frames)
     if num_total < 1:
         raise ValueError(f"there are no frames to sample from (num_total = {num_total})")
     if num_frames is None or num_frames >= num_total:
@@ -111,10 +111,10 @@ def sample_frame_indices(num_total: int, num_frames: int | None) -> list[int]:
     return sorted({int(round(v)) for v in np.linspace(0, num_total - 1, num_frames)})
 
 
-def _whole(name: str, value: Any) -> int:
-    """``value`` as an int if it is a whole number (8, np.int64(8), 8.0); else TypeError
-    (True would read as 1 frame, 2.5 and NaN failed inside range() or np.linspace)."""
+def whole_number(name: str, value: Any) -> int:
+    """``value`` as an int if it is a whole number (8, np.int64(8), 8.0, 2**2000); else TypeError
+    naming ``name`` (True would read as 1 frame, 2.5 and NaN failed inside range() or np.linspace)."""
     if (isinstance(value, bool) or not isinstance(value, numbers.Real)
-            or not float(value).is_integer()):
+            or not isinstance(value, numbers.Integral) and not float(value).is_integer()):
         raise TypeError(f"{name} must be a whole number, got {type(value).__name__} {value!r:.40}")
     return int(value)

@@ -58,16 +58,22 @@ def _prepare(
 MAX_THICKNESS = 32767
 
 
-def _check_thickness(thickness: int) -> int:
-    """``thickness`` as an int in [1, MAX_THICKNESS] (2.7 would otherwise draw 2 px, 10**9
-    fail in OpenCV's "thickness <= MAX_THICKNESS" assertion, inf overflow)."""
+def _check_thickness(thickness: int, name: str = "thickness", low: int = 1) -> int:
+    """``thickness`` as an int in [low, MAX_THICKNESS] (2.7 would otherwise draw 2 px, 10**9
+    fail in OpenCV's "thickness <= MAX_THICKNESS" assertion, inf overflow); ``name`` for
+    the messages (also checks ``text_padding``, in [0, MAX_THICKNESS])."""
     if (isinstance(thickness, (bool, np.bool_)) or not isinstance(thickness, numbers.Real)
             or not (isinstance(thickness, numbers.Integral) or float(thickness).is_integer())):
-        raise TypeError(f"thickness must be a whole number of pixels, got "
+        raise TypeError(f"{name} must be a whole number of pixels, got "
                         f"{type(thickness).__name__} {thickness!r}")
-    if not 1 <= thickness <= MAX_THICKNESS:
-        raise ValueError(f"thickness must be in [1, {MAX_THICKNESS}] pixels, got {thickness!r:.40}")
+    if not low <= thickness <= MAX_THICKNESS:
+        raise ValueError(f"{name} must be in [{low}, {MAX_THICKNESS}] pixels, got {thickness!r:.40}")
     return int(thickness)
+
+
+#: Largest font scale: the automatic stroke width, ``round(2 * scale)``, must stay a line
+#: width OpenCV can draw (MAX_THICKNESS); inf overflowed.
+MAX_TEXT_SCALE = MAX_THICKNESS / 2
 
 
 def auto_text_scale(shape: tuple[int, int]) -> float:
@@ -212,10 +218,10 @@ class NumberAnnotator(_Annotator):
 
     Args:
         palette: colours by mark number.
-        text_scale: OpenCV font scale; ``None`` picks one from the image size
-            (:func:`auto_text_scale`).
+        text_scale: OpenCV font scale, in (0, 16383.5]; ``None`` picks one from the image
+            size (:func:`auto_text_scale`).
         text_thickness: stroke width; ``None`` follows the scale.
-        text_padding: pixels between text and box edge.
+        text_padding: pixels between text and box edge, a whole number in [0, 32767].
         gap: minimum pixels between two label boxes.
 
     Example:
@@ -238,11 +244,11 @@ class NumberAnnotator(_Annotator):
         gap: int = 1,
     ) -> None:
         super().__init__(palette)
-        if text_scale is not None and not float(text_scale) > 0:
-            raise ValueError(f"text_scale must be > 0, got {text_scale}")
+        if text_scale is not None and not 0 < float(text_scale) <= MAX_TEXT_SCALE:  # inf overflowed in round(2 * scale)
+            raise ValueError(f"text_scale must be > 0 and <= {MAX_TEXT_SCALE:g}, got {text_scale}")
         self.text_scale = None if text_scale is None else float(text_scale)
         self.text_thickness = None if text_thickness is None else max(1, int(text_thickness))
-        self.text_padding = max(0, int(text_padding))
+        self.text_padding = _check_thickness(text_padding, "text_padding", low=0)  # inf overflowed in int()
         self.gap = max(0, int(gap))
 
     def _font(self, shape: tuple[int, int]) -> tuple[float, int]:

@@ -7,6 +7,8 @@ from typing import Iterable, Literal
 
 import numpy as np
 
+from motionbits.frames import whole_number
+
 from .inputs import check_label_map
 
 __all__ = ["MarkStyle", "MarkRegistry", "mark_text", "parse_mark_text"]
@@ -23,8 +25,11 @@ def mark_text(number: int, style: MarkStyle = "number") -> str:
     Example:
         >>> [mark_text(n, "letter") for n in (1, 26, 27, 28)]
         ['a', 'z', 'aa', 'ab']
+
+    Raises:
+        TypeError: ``number`` is not a whole number (1.5 and True were drawn as ``1``).
     """
-    number = int(number)
+    number = whole_number("number", number)
     if number < 1:
         raise ValueError(f"mark numbers start at 1, got {number}")
     if style == "number":
@@ -174,9 +179,10 @@ class MarkRegistry:
         return obj_id in self._number
 
     def number(self, obj_id: int) -> int:
-        """Mark number (1-based) of object ``obj_id``."""
+        """Mark number (1-based) of object ``obj_id`` (a whole number: 3.7 is no id, not 3)."""
+        obj_id = whole_number("obj_id", obj_id)
         try:
-            return self._number[int(obj_id)]
+            return self._number[obj_id]
         except KeyError:
             raise KeyError(
                 f"object id {obj_id} is not registered; call registry.update(label_map) first "
@@ -188,8 +194,8 @@ class MarkRegistry:
         return mark_text(self.number(obj_id), self.style)
 
     def id_for_number(self, number: int) -> int | None:
-        """Object id that carries mark ``number``, or None."""
-        return self._id.get(int(number))
+        """Object id that carries mark ``number`` (a whole number: 1.5 is no mark, not 1), or None."""
+        return self._id.get(whole_number("number", number))
 
     def id_for_text(self, text: str) -> int | None:
         """Object id whose mark reads ``text`` (``'3'`` / ``'c'``), or None."""

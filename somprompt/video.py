@@ -244,15 +244,17 @@ def write_gif(frames: Sequence[ImageLike], path: "str | os.PathLike", fps: float
     """Write RGB frames to a looping GIF (Pillow).
 
     Raises:
-        ValueError: no frames, frames of different sizes, ``fps`` not a number >= 100 / 65535
-            (a GIF frame lasts at most 655.35 s), or ``path`` does not end in ``.gif``.
+        ValueError: no frames, frames of different sizes, ``fps`` not a number in
+            [100 / 65535, 100] (a GIF frame lasts 1/100 s to 655.35 s), or ``path`` does not
+            end in ``.gif``.
         IsADirectoryError: ``path`` is a folder.
     """
     arrs = _as_arrays(frames)
-    # a GIF's frame delay is at most 65535 centiseconds (was: OverflowError from Pillow)
-    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not fps >= 100 / 65535:
-        raise ValueError(f"fps must be a number >= {100 / 65535:.5f} (a GIF frame lasts at most "
-                         f"655.35 s), got {fps!r}")
+    # a GIF's frame delay is 1 to 65535 centiseconds (was: OverflowError from Pillow below,
+    # 0 ms delays above, which viewers play at their own speed)
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not 100 / 65535 <= fps <= 100:
+        raise ValueError(f"fps must be a number >= {100 / 65535:.5f} and <= 100 (a GIF frame lasts 1/100 s "
+                         f"to 655.35 s), got {fps!r}")
     path = Path(path)
     if path.is_dir():  # else PIL's "unknown file extension: "
         raise IsADirectoryError(f"{path} is a folder; pass the GIF file to write, e.g. {path / 'marks.gif'}")

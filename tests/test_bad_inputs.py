@@ -495,6 +495,23 @@ def _phrases(text, **kw):
     return phrases_from_answer(text, **kw)
 
 
+def _openai_generate(prompt="what moved?", **kw):
+    """OpenAICompatibleVLM.generate with a canned reply in place of the network; returns
+    the request body it would have sent."""
+    from vlm_adapters import OpenAICompatibleVLM
+
+    vlm, sent = OpenAICompatibleVLM("http://127.0.0.1:9/v1", model="m"), []
+    with mock.patch.object(vlm, "_post", lambda body: sent.append(body) or {"choices": [{"message": {"content": "ok"}}]}):
+        vlm.generate([np.zeros((8, 8, 3), np.uint8)], prompt, **kw)
+    return sent[-1]
+
+
+def _data_url_pixels(url: str) -> np.ndarray:
+    import base64
+
+    return np.asarray(Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))))
+
+
 def _parse(text, labels=None, **kw):
     from somprompt import parse_answer
 
@@ -812,6 +829,8 @@ CASES: list[Case] = [
     Case("eval-api/write-label-map-jpg", api(lambda t: __import__("motionbits.eval").eval.write_label_map(
         t / "gt.jpg", _LAB * 1000)), CLEAR, "must end in .png",
         absent=("gt.jpg",)),  # was: wrote an 8-bit JPEG (ids 3000 and 5000 read back as 255)
+    Case("eval-api/boundary-tolerance-negative", api(lambda t: __import__("motionbits.eval").eval.boundary_tolerance(
+        (480, 640), -0.01)), CLEAR, "fraction must be a finite number >= 0"),  # was: -8 pixels
     # ---- somprompt
     Case("somprompt/draw-70000-ids", api(lambda t: _draw(_many_ids(70_000))), CORRECT,
          check=lambda o, t: (len(o.value.placements) == 256 and len(o.value.dropped) == 70_000 - 256
@@ -824,6 +843,10 @@ CASES: list[Case] = [
     Case("somprompt/draw-shape-mismatch", api(lambda t: _draw(_LAB, shape=(30, 30))), CLEAR, "labels"),
     Case("somprompt/thickness-huge", api(lambda t: _draw(_LAB, thickness=10**9)), CLEAR,
          "thickness must be in [1, 32767]"),  # was: OpenCV's "thickness <= MAX_THICKNESS" assertion
+    Case("somprompt/text-scale-inf", api(lambda t: _draw(_LAB, text_scale=float("inf"))), CLEAR,
+         "text_scale must be > 0 and <= 16383.5"),  # was: OverflowError "cannot convert float infinity to integer"
+    Case("somprompt/text-padding-inf", api(lambda t: __import__("somprompt").NumberAnnotator(text_padding=float("inf"))),
+         CLEAR, "text_padding must be a whole number"),  # was: OverflowError "cannot convert float infinity to integer"
     Case("somprompt/draw-uint64-huge-ids", api(lambda t: _draw(np.where(_LAB > 0, np.uint64(2**63 + 5), np.uint64(0)))),
          CLEAR, "too large for int64"),  # was: "holds negative ids (min -9223372036854775803)"
     Case("api/check-label-map-uint64-huge", api(lambda t: __import__("motionbits.objects").objects.check_label_map(
@@ -869,6 +892,8 @@ CASES: list[Case] = [
          "is a folder"),  # was: PIL's "unknown file extension: "
     Case("somprompt/write-gif-fps-tiny", api(lambda t: __import__("somprompt").write_gif(list(_F), t / "v.gif", fps=1e-3)),
          CLEAR, "fps must be"),  # was: OverflowError (a GIF frame lasts at most 655.35 s)
+    Case("somprompt/write-gif-fps-huge", api(lambda t: __import__("somprompt").write_gif(list(_F), t / "v.gif", fps=1e6)),
+         CLEAR, "<= 100", absent=("v.gif",)),  # was: wrote 0 ms frame delays (a GIF counts in 1/100 s)
     Case("somprompt/write-gif-fps-str", api(lambda t: __import__("somprompt").write_gif(list(_F), t / "v.gif", fps="10")),
          CLEAR, "fps must be"),  # was: "'>' not supported between instances of 'str' and 'int'"
     Case("somprompt/prompt-not-utf8", api(lambda t: ((t / "p.txt").write_bytes(b"\xff\xfe {question}"),
@@ -884,6 +909,14 @@ CASES: list[Case] = [
          "ids must be an iterable"),  # was: "'NoneType' object is not iterable"
     Case("somprompt/register-whole-float-and-huge", api(lambda t: (lambda r: (r.register([3.0, 2**2000]), r.ids)[1])(
         __import__("somprompt").MarkRegistry())), CORRECT, check=lambda o, t: o.value == [3, 2**2000]),
+    Case("somprompt/registry-number-fraction", api(lambda t: (lambda r: (r.register([3, 5]), r.number(3.7))[1])(
+        __import__("somprompt").MarkRegistry())), CLEAR, "obj_id must be a whole number"),  # was: 1, the mark of id 3
+    Case("somprompt/registry-id-for-number-fraction", api(lambda t: (lambda r: (r.register([3, 5]), r.id_for_number(1.5))[1])(
+        __import__("somprompt").MarkRegistry())), CLEAR, "number must be a whole number"),  # was: 3, the id of mark 1
+    Case("somprompt/mark-text-fraction", api(lambda t: __import__("somprompt").mark_text(1.5)), CLEAR,
+         "number must be a whole number"),  # was: '1'
+    Case("somprompt/mark-text-bool", api(lambda t: __import__("somprompt").mark_text(True)), CLEAR,
+         "number must be a whole number"),  # was: '1'
     Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),
@@ -923,6 +956,34 @@ CASES: list[Case] = [
     Case("vlm/frames-empty", api(lambda t: _stub_generate([])), CLEAR, "empty"),
     Case("vlm/encode-max-side-0", api(lambda t: __import__("vlm_adapters.openai_compat").openai_compat.encode_image_data_url(
         Image.new("RGB", (64, 48)), max_side=0)), CLEAR, "max_side must be"),  # was: a 1x1 px image
+    Case("vlm/encode-format-bogus", api(lambda t: __import__("vlm_adapters.openai_compat").openai_compat.encode_image_data_url(
+        Image.new("RGB", (8, 8)), image_format="bogus")), CLEAR,
+        "image_format must be 'png' or 'jpeg'"),  # was: KeyError 'BOGUS'
+    Case("vlm/encode-numpy-array", api(lambda t: __import__("vlm_adapters.openai_compat").openai_compat.encode_image_data_url(
+        _F[0])), CORRECT, check=lambda o, t: np.array_equal(_data_url_pixels(o.value), _F[0])),
+    # was: "'numpy.ndarray' object has no attribute 'save'" (frames are arrays everywhere else)
+    Case("vlm/openai-max-new-tokens-0", api(lambda t: _openai_generate(max_new_tokens=0)), CLEAR,
+         "max_new_tokens must be >= 1"),  # was: sent "max_tokens": 0
+    Case("vlm/openai-max-new-tokens-negative", api(lambda t: _openai_generate(max_new_tokens=-5)), CLEAR,
+         "max_new_tokens must be >= 1"),  # was: sent "max_tokens": -5
+    Case("vlm/openai-max-new-tokens-fraction", api(lambda t: _openai_generate(max_new_tokens=1.9)), CLEAR,
+         "max_new_tokens must be a whole number"),  # was: sent "max_tokens": 1
+    Case("vlm/openai-max-new-tokens-inf", api(lambda t: _openai_generate(max_new_tokens=float("inf"))), CLEAR,
+         "max_new_tokens must be a whole number"),  # was: OverflowError "cannot convert float infinity to integer"
+    Case("vlm/openai-prompt-none", api(lambda t: _openai_generate(None)), CLEAR,
+         "prompt must be a str"),  # was: sent "text": null
+    Case("vlm/openai-temperature-nan", api(lambda t: _openai_generate(do_sample=True, temperature=float("nan"))),
+         CLEAR, "temperature must be a finite number >= 0"),  # was: sent "temperature": NaN (not JSON)
+    Case("vlm/openai-temperature-negative", api(lambda t: _openai_generate(do_sample=True, temperature=-0.5)),
+         CLEAR, "temperature must be a finite number >= 0"),  # was: sent "temperature": -0.5
+    Case("vlm/openai-temperature-inf", api(lambda t: _openai_generate(do_sample=True, temperature=float("inf"))),
+         CLEAR, "temperature must be a finite number >= 0"),  # was: sent "temperature": Infinity (not JSON)
+    Case("vlm/openai-seed-fraction", api(lambda t: _openai_generate(seed=1.5)), CLEAR,
+         "seed must be a whole number"),  # was: sent "seed": 1
+    Case("vlm/generate-batch-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate_batch(
+        None, "what moved?")), CLEAR, "videos must be a list of videos"),  # was: "object of type 'NoneType' has no len()"
+    Case("vlm/generate-batch-prompts-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate_batch(
+        [_F], None)), CLEAR, "prompts must be a str or a list"),  # was: "'NoneType' object is not iterable"
 ]
 # --------------------------------------------------------------------------- tests
 

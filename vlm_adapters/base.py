@@ -6,13 +6,15 @@ helpers (`resolve_device`, `resolve_dtype`) import it when called.
 from __future__ import annotations
 
 import abc
+import math
+import numbers
 import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Protocol, Union, runtime_checkable
 
 import numpy as np
 
-from motionbits.frames import as_rgb_array, sample_frame_indices
+from motionbits.frames import as_rgb_array, sample_frame_indices, whole_number
 from motionbits.objects import MissingDependencyError, require, require_attr
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -133,6 +135,28 @@ def resolve_dtype(dtype: Any, device: Any) -> Any:
     return dtype
 
 
+# --------------------------------------------------------------------------- generation settings
+
+
+def check_generate_args(prompt: Any, *, max_new_tokens: Any, do_sample: bool, temperature: Any, seed: Any) -> None:
+    """Raise a one-line error for a `generate` argument that no backend can use.
+
+    Raises:
+        TypeError: `prompt` is not a str; `max_new_tokens` or `seed` is not a whole number.
+        ValueError: `max_new_tokens` < 1; with ``do_sample``, a `temperature` that is not a
+            finite number >= 0 (NaN and inf are not JSON, -1 is no distribution).
+    """
+    if not isinstance(prompt, str):  # else None was sent as "text": null
+        raise TypeError(f"prompt must be a str, got {type(prompt).__name__} {prompt!r:.40}")
+    if whole_number("max_new_tokens", max_new_tokens) < 1:
+        raise ValueError(f"max_new_tokens must be >= 1, got {max_new_tokens!r}")
+    if do_sample and (isinstance(temperature, bool) or not isinstance(temperature, numbers.Real)
+                      or not (math.isfinite(temperature) and temperature >= 0)):
+        raise ValueError(f"temperature must be a finite number >= 0 when sampling, got {temperature!r:.40}")
+    if seed is not None:
+        whole_number("seed", seed)
+
+
 # --------------------------------------------------------------------------- interface
 
 
@@ -207,7 +231,7 @@ class BaseVLM(abc.ABC):
         seed: int | None = None,
     ) -> list[str]:
         """One answer per video; `prompts` is one string for all or one per video."""
-        prompts = _broadcast_prompts(prompts, len(videos))
+        prompts = _broadcast_prompts(prompts, videos)
         return [
             self.generate(
                 v, p, system, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature, seed=seed
@@ -222,9 +246,16 @@ class BaseVLM(abc.ABC):
         return f"{type(self).__name__}(name={self.name!r})"
 
 
-def _broadcast_prompts(prompts: Sequence[str] | str, n: int) -> list[str]:
+def _broadcast_prompts(prompts: Sequence[str] | str, videos: Sequence[Sequence[Frame]]) -> list[str]:
+    """One prompt per video of `videos` (a str is used for all)."""
+    if videos is None or isinstance(videos, (str, bytes)) or not hasattr(videos, "__len__"):
+        # else "object of type 'NoneType' has no len()"
+        raise TypeError(f"videos must be a list of videos (each a list of frames), got {type(videos).__name__}")
+    n = len(videos)
     if isinstance(prompts, str):
         return [prompts] * n
+    if prompts is None or not hasattr(prompts, "__iter__"):  # else "'NoneType' object is not iterable"
+        raise TypeError(f"prompts must be a str or a list of str (one per video), got {type(prompts).__name__}")
     prompts = list(prompts)
     if len(prompts) != n:
         raise ValueError(f"got {len(prompts)} prompts for {n} videos; pass one prompt or one per video")

@@ -199,7 +199,7 @@ class TransformersVLM(BaseVLM):
         """
         if isinstance(prompts, str):
             videos = [videos]  # type: ignore[list-item]
-        prompts = _broadcast_prompts(prompts, len(videos))
+        prompts = _broadcast_prompts(prompts, videos)
         clips = [to_pil_frames(v) for v in videos]
         texts = [
             self.processor.apply_chat_template(
@@ -305,7 +305,7 @@ class TransformersVLM(BaseVLM):
         (`stacks_video_frames`), videos are batched by frame count: one forward batch per
         distinct length; answers come back in the order of `videos`.
         """
-        prompts = _broadcast_prompts(prompts, len(videos))
+        prompts = _broadcast_prompts(prompts, videos)
         clips = [to_pil_frames(v) for v in videos]
         if self.frames_as == "video" and self.stacks_video_frames:
             groups: dict[int, list[int]] = {}

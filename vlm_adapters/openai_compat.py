@@ -21,29 +21,43 @@ from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from .base import DEFAULT_MAX_NEW_TOKENS, BaseVLM, Frame, _broadcast_prompts, to_pil_frames
+from motionbits.frames import as_rgb_array
+
+from .base import DEFAULT_MAX_NEW_TOKENS, BaseVLM, Frame, _broadcast_prompts, check_generate_args, to_pil_frames
 
 __all__ = ["OpenAICompatibleVLM", "encode_image_data_url"]
 
 _IMAGE_FORMATS = ("png", "jpeg", "jpg")
 
 
+def _check_image_format(image_format: Any) -> str:
+    """``image_format`` as PIL's name for it (``"png"`` / ``"jpeg"``), else ValueError."""
+    if not isinstance(image_format, str) or image_format.lower() not in _IMAGE_FORMATS:
+        raise ValueError(f"image_format must be 'png' or 'jpeg', got {image_format!r}")
+    fmt = image_format.lower()
+    return "jpeg" if fmt == "jpg" else fmt
+
+
 def encode_image_data_url(image: Any, image_format: str = "png", max_side: int | None = None) -> str:
-    """One PIL image as a ``data:image/...;base64,...`` URL.
+    """One image as a ``data:image/...;base64,...`` URL.
 
     Args:
-        image: an RGB PIL image.
+        image: a PIL image, or a frame as :func:`~vlm_adapters.base.to_rgb_frames` takes it
+            ((H, W, 3) uint8 RGB array, greyscale, RGBA, 16-bit).
         image_format: ``"png"`` (lossless: set-of-mark numbers stay crisp) or ``"jpeg"`` (smaller).
         max_side: downscale so the longer side is at most this many pixels, >= 1 (None: keep size).
     """
     if max_side is not None and (isinstance(max_side, bool) or not isinstance(max_side, numbers.Integral)
                                  or max_side < 1):  # else 0 or -3 sent a 1x1 image
         raise ValueError(f"max_side must be None or an int >= 1, got {max_side!r}")
+    fmt = _check_image_format(image_format)  # else PIL's KeyError 'BOGUS'
+    if not hasattr(image, "save"):  # an array: else "'numpy.ndarray' object has no attribute 'save'"
+        from PIL import Image
+
+        image = Image.fromarray(as_rgb_array(image, name="image"))
     if max_side is not None and max(image.size) > max_side:
         scale = max_side / max(image.size)
         image = image.resize((max(1, round(image.size[0] * scale)), max(1, round(image.size[1] * scale))))
-    fmt = image_format.lower()
-    fmt = "jpeg" if fmt == "jpg" else fmt
     buf = io.BytesIO()
     image.save(buf, format=fmt.upper(), **({"quality": 90} if fmt == "jpeg" else {}))
     return f"data:image/{fmt};base64," + base64.b64encode(buf.getvalue()).decode("ascii")
@@ -84,8 +98,7 @@ class OpenAICompatibleVLM(BaseVLM):
     ) -> None:
         if not isinstance(base_url, str) or not base_url.startswith(("http://", "https://")):
             raise ValueError(f"base_url must be a str starting with http:// or https://, got {base_url!r}")
-        if str(image_format).lower() not in _IMAGE_FORMATS:
-            raise ValueError(f"image_format must be 'png' or 'jpeg', got {image_format!r}")
+        _check_image_format(image_format)
         if max_image_side is not None and (isinstance(max_image_side, bool) or
                                            not isinstance(max_image_side, numbers.Integral) or max_image_side < 1):
             raise ValueError(f"max_image_side must be None or an int >= 1, got {max_image_side!r}")
@@ -122,7 +135,14 @@ class OpenAICompatibleVLM(BaseVLM):
         temperature: float = 1.0,
         seed: int | None = None,
     ) -> dict[str, Any]:
-        """The JSON body of one chat-completions request."""
+        """The JSON body of one chat-completions request.
+
+        Raises:
+            TypeError, ValueError: a setting no server can take (see
+                :func:`~vlm_adapters.base.check_generate_args`), before anything is sent.
+        """
+        check_generate_args(prompt, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature,
+                            seed=seed)
         content: list[dict[str, Any]] = [
             {"type": "image_url", "image_url": {"url": encode_image_data_url(im, self.image_format, self.max_image_side)}}
             for im in to_pil_frames(frames)
@@ -227,7 +247,7 @@ class OpenAICompatibleVLM(BaseVLM):
         seed: int | None = None,
     ) -> list[str]:
         """One request per video, `max_workers` in flight; answers in input order."""
-        prompts = _broadcast_prompts(prompts, len(videos))
+        prompts = _broadcast_prompts(prompts, videos)
         kw = dict(max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature, seed=seed)
         with ThreadPoolExecutor(self.max_workers) as pool:
             futures = [pool.submit(self.generate, v, p, system, **kw) for v, p in zip(videos, prompts)]

@@ -29,6 +29,7 @@ with the DAVIS edge cases (no B_p: BP = 1; no B_g: BR = 1, so both empty scores 
 from __future__ import annotations
 
 import math
+import numbers
 
 import cv2
 import numpy as np
@@ -37,7 +38,14 @@ __all__ = ["boundary_map", "boundary_counts", "boundary_tolerance", "disk", "pai
 
 
 def boundary_tolerance(shape: tuple[int, ...], fraction: float = 0.003) -> int:
-    """Match tolerance in pixels: ``ceil(fraction * sqrt(H^2 + W^2))`` (3 at 480x640)."""
+    """Match tolerance in pixels: ``ceil(fraction * sqrt(H^2 + W^2))`` (3 at 480x640).
+
+    Raises:
+        ValueError: ``fraction`` is not a finite number >= 0 (-0.01 gave a negative tolerance).
+    """
+    if (isinstance(fraction, bool) or not isinstance(fraction, numbers.Real)
+            or not (math.isfinite(fraction) and fraction >= 0)):
+        raise ValueError(f"fraction must be a finite number >= 0, got {fraction!r:.40}")
     h, w = int(shape[0]), int(shape[1])
     return int(math.ceil(fraction * math.hypot(h, w)))
 
