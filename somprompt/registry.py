@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numbers
 from typing import Iterable, Literal
 
 import numpy as np
@@ -86,11 +85,11 @@ def whole_ids(values: Iterable, name: str, what: str = "object ids") -> list[int
                         f"{type(values).__name__} {values!r:.40}")
     ids = []
     for i in values:
-        if (isinstance(i, (bool, np.bool_)) or not isinstance(i, numbers.Real)
-                or not isinstance(i, numbers.Integral) and not float(i).is_integer()):
+        try:
+            ids.append(whole_number(name, i))
+        except TypeError:
             raise TypeError(f"{name} must hold integer {what} (whole numbers), got "
-                            f"{type(i).__name__} {i!r:.40}")
-        ids.append(int(i))
+                            f"{type(i).__name__} {i!r:.40}") from None
     return ids
 
 
