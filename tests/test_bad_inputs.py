@@ -1,8 +1,8 @@
 """Every bad or edge input gets a one-line error or a correct result (issue 12).
 
-One table of cases over the CLI (``segment``, ``bench``, ``eval``, ``synth``,
-``benchmark``) and the Python API of ``motionbits``, ``somprompt`` and ``vlm_adapters``.
-Each case is run and given a verdict:
+One table of cases over the CLI (``segment``, ``batch``, ``bench``, ``eval``, ``synth``,
+``benchmark``, ``compare``, ``scenes``) and the Python API of ``motionbits``,
+``somprompt`` and ``vlm_adapters``. Each case is run and given a verdict:
 
 - ``clear error``: CLI exit status 2 (130 for an interrupt) with exactly one stderr line
   ``motionbits CMD: error: ...`` holding the expected words; API: a ValueError /
@@ -419,6 +419,26 @@ def rerun_as_prediction(tmp: Path) -> None:
         assert main(["segment", str(tmp.parent / "assets" / "one"), "--out", out, "--overwrite", *SEG]) == 0
 
 
+def a_json(name: str, data: Any) -> Callable[[Path], None]:
+    return lambda tmp: (tmp / name).write_text(json.dumps(data))
+
+
+def a_sequence(mixed: bool = False) -> Callable[[Path], None]:
+    """A DAVIS-style sequence tmp/seq (frames/, gt/) of the 6 asset frames, one box mask
+    each; ``mixed``: its frame 00001.png shrunk to 100x80."""
+    def setup(tmp: Path) -> None:
+        seq = tmp / "seq"
+        (seq / "frames").mkdir(parents=True)
+        (seq / "gt").mkdir()
+        mask = np.zeros((120, 160), np.uint8)
+        mask[20:60, 30:80] = 255
+        for f in sorted((tmp.parent / "assets" / "frames").glob("*.png")):
+            img = Image.open(f)
+            (img.resize((100, 80)) if mixed and f.name == "00001.png" else img).save(seq / "frames" / f.name)
+            Image.fromarray(mask).save(seq / "gt" / f.name)
+    return setup
+
+
 def eval_json_f1(value: float) -> Callable[[Outcome, Path], bool]:
     def check(o: Outcome, tmp: Path) -> bool:
         scores = json.loads((tmp / "s.json").read_text())
@@ -742,6 +762,20 @@ CASES: list[Case] = [
     Case("benchmark/save-pred", cli("benchmark", "--data", "{a}/data", "--methods", "flow-cc", "--quiet",
                                     "--save-pred", "{t}/sp"),
          CORRECT, check=lambda o, t: (t / "sp/flow-cc/robot/scene_0000.png").is_file()),
+    # ---- compare
+    Case("compare/scene-not-scored", prepared(a_json("a.json", {"per_scene": {"robot/scene_0000": {}}}), cli(
+        "compare", "{t}/a.json", "{t}/a.json")), CLEAR, "is not scored"),  # was: KeyError 'instances' traceback
+    Case("compare/method-without-scores", prepared(a_json("a.json", {"methods": {"m": {}}}), cli(
+        "compare", "{t}/a.json", "{t}/a.json")), CLEAR, "has no 'per_scene'"),  # was: KeyError 'per_scene' traceback
+    # ---- scenes
+    Case("scenes/out-empty", prepared(a_sequence(), in_tmp(cli("scenes", "davis", "{t}/seq", "--out", "", "--length", "3"))),
+         CLEAR, "--out is empty", absent=("seq_00000",)),  # was: scenes written into the current folder, exit 0
+    Case("scenes/frames-mixed-sizes", prepared(a_sequence(mixed=True), cli(
+        "scenes", "davis", "{t}/seq", "--out", "{t}/o", "--length", "3", "--stride", "3")), CLEAR,
+         "00001.png is 100x80", absent=("o",)),  # was: a scene of 160x120 and 100x80 frames written, exit 0
+    # ---- batch
+    Case("batch/out-empty", in_tmp(cli("batch", "{a}/clip.mp4", "--out", "", "--workers", "1", *SEG)), CLEAR,
+         "--out is empty", absent=("batch.jsonl", "clip")),  # was: clip/ and batch.jsonl written into the current folder, exit 0
     # ---- motionbits API: config
     Case("api/config-n_nodes-str", api(lambda t: _config(n_nodes="10000")), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-bool", api(lambda t: _config(n_nodes=True)), CLEAR, "n_nodes"),

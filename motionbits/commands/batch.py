@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from motionbits.commands.segment import _check_options, add_video_options
+from motionbits.outputs import check_named
 
 __all__ = ["register", "run"]
 
@@ -52,6 +53,7 @@ def register(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     from motionbits.batch import expand_inputs, run_batch
 
+    check_named(args.out, "--out", "folder")  # else the current folder
     if args.address and args.engine != "ray":
         raise ValueError("--address needs --engine ray")
     own = {"inputs", "out", "engine", "workers", "address", "retry_failed", "quiet", "func",

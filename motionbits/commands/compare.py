@@ -52,7 +52,7 @@ def load_run(path: str | Path, method: str | None = None) -> dict:
     if not isinstance(data, dict):
         raise ValueError(f"{path} is not a --json file of motionbits benchmark or eval")
     if "per_scene" in data:  # eval --json of one prediction folder: ``method`` is moot
-        return data["per_scene"]
+        return _scored(path, data["per_scene"])
     methods = data.get("methods")
     if not isinstance(methods, dict) or not methods:
         raise ValueError(f"{path} is not a --json file of motionbits benchmark or eval "
@@ -64,7 +64,27 @@ def load_run(path: str | Path, method: str | None = None) -> dict:
         method = next(iter(methods))
     if method not in methods:
         raise ValueError(f"{path} has no method {method!r} (it has {', '.join(methods)})")
-    return methods[method]["per_scene"]
+    entry = methods[method]
+    return _scored(path, entry.get("per_scene") if isinstance(entry, dict) else None, method)
+
+
+def _scored(path: Path, per_scene, method: str | None = None) -> dict:
+    """``per_scene`` if it is scores of scenes (``{scene: {"instances": [{"gt", "IoU"}],
+    "false_positives": {"spurious"}}}``); else ValueError naming ``path``."""
+    def scene_ok(v) -> bool:
+        return (isinstance(v, dict) and isinstance(v.get("instances"), list)
+                and all(isinstance(i, dict) and "gt" in i and "IoU" in i for i in v["instances"])
+                and isinstance(v.get("false_positives"), dict) and "spurious" in v["false_positives"])
+
+    where = f"{path}" if method is None else f"{path} method {method!r}"
+    if not isinstance(per_scene, dict):
+        raise ValueError(f"{where} has no 'per_scene' scores: not a --json file of motionbits "
+                         "benchmark or eval")
+    bad = next((k for k, v in per_scene.items() if not scene_ok(v)), None)
+    if bad is not None:
+        raise ValueError(f"{where}: scene {bad!r} is not scored (no 'instances' of gt/IoU and "
+                         "'false_positives'): not a --json file of motionbits benchmark or eval")
+    return per_scene
 
 
 def run(args: argparse.Namespace) -> int:

@@ -34,7 +34,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from motionbits.eval.sequences import scenes_from_sequence
+    from motionbits.outputs import check_named
 
+    check_named(args.out, "--out", "folder")  # else the current folder
     scenes = scenes_from_sequence(args.src, args.out, length=args.length, stride=args.stride,
                                   max_side=args.max_side)
     print(f"wrote {len(scenes)} scenes to {args.out}")

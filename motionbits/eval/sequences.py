@@ -39,6 +39,24 @@ def _folders(src: Path) -> tuple[Path, Path]:
                             "DAVIS JPEGImages/<res>/<seq> folder with matching Annotations/)")
 
 
+def _check_sizes(files: list[Path]) -> None:
+    """ValueError unless the frame files share one size (read from their headers)."""
+    from PIL import Image
+
+    size = None
+    for f in dict.fromkeys(files):
+        try:
+            with Image.open(f) as img:
+                wh = img.size
+        except OSError as exc:
+            raise ValueError(f"could not read frame {f}: {exc}") from exc
+        if size is None:
+            first, size = f, wh
+        elif wh != size:
+            raise ValueError(f"frame {f} is {wh[0]}x{wh[1]} but {first.name} is {size[0]}x{size[1]}; "
+                             "the frames of a scene share one size")
+
+
 def scenes_from_sequence(
     src: str | os.PathLike,
     out: str | os.PathLike,
@@ -67,8 +85,8 @@ def scenes_from_sequence(
     Raises:
         FileNotFoundError: a folder or a mask is missing.
         ValueError: bad ``length``/``stride``/``max_side``, the sequence is shorter than
-            ``length``, a mask's size differs from its frame's, or a scene folder already
-            holds frames.
+            ``length``, the frames differ in size, a mask's size differs from its frame's, or a
+            scene folder already holds frames.
     """
     if length < 2 or stride < 1 or max_side < 0:
         raise ValueError(f"need length >= 2, stride >= 1, max_side >= 0; got {length}, "
@@ -81,15 +99,17 @@ def scenes_from_sequence(
     if len(frames) < length:
         raise ValueError(f"{frame_dir} holds {len(frames)} frames, fewer than --length {length}")
     name = name or src.resolve().name
+    starts = range(0, len(frames) - length + 1, stride)
+    _check_sizes([f for s in starts for f in frames[s : s + length]])  # before writing any scene
     scenes = []
-    for start in range(0, len(frames) - length + 1, stride):
+    for start in starts:
         window = frames[start : start + length]
         scene = out / f"{name}_{start:05d}"
         if (scene / "frames").is_dir() and any((scene / "frames").iterdir()):
             raise ValueError(f"{scene}/frames already holds files; choose an empty --out")
-        (scene / "frames").mkdir(parents=True, exist_ok=True)
         mask_file = gt_dir / f"{window[-1].stem}.png"
         mask = read_label_map(mask_file)
+        (scene / "frames").mkdir(parents=True, exist_ok=True)
         ids = np.unique(mask)
         ids = ids[ids > 0]
         gt = np.searchsorted(ids, mask) + 1
