@@ -64,7 +64,18 @@ class ColorPalette:
     colors: tuple[Color, ...]
 
     def __post_init__(self) -> None:
-        cols = tuple(_to_color(c) for c in self.colors)
+        if isinstance(self.colors, str):  # else iterated char by char: "colour '#' is not ..."
+            raise TypeError(f"colors must be a sequence of colours, got the str {self.colors!r:.40}; "
+                            f"for one colour use ColorPalette([{self.colors!r:.40}])")
+        bad = "colors must be a sequence of colours ('#rrggbb' strings or RGB triples), got "
+        try:
+            values = tuple(self.colors)
+        except TypeError:  # None, 5: "not iterable"
+            raise TypeError(f"{bad}{type(self.colors).__name__} {self.colors!r:.40}") from None
+        for i, c in enumerate(values):
+            if not isinstance(c, str) and not hasattr(c, "__iter__"):
+                raise TypeError(f"{bad}colors[{i}] = {type(c).__name__} {c!r:.40}")
+        cols = tuple(_to_color(c) for c in values)
         if not cols:
             raise ValueError("a ColorPalette needs at least one colour")
         object.__setattr__(self, "colors", cols)

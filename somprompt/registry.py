@@ -202,8 +202,9 @@ class MarkRegistry:
         return None if n is None else self._id.get(n)
 
     def frames_seen(self, obj_id: int) -> list[int]:
-        """Frame indices passed to :meth:`update` in which ``obj_id`` was present, sorted."""
-        return sorted(self._frames.get(int(obj_id), ()))
+        """Frame indices passed to :meth:`update` in which ``obj_id`` was present, sorted
+        (``obj_id`` a whole number: 3.7 is no id, not 3)."""
+        return sorted(self._frames.get(whole_number("obj_id", obj_id), ()))
 
     def __repr__(self) -> str:
         pairs = ", ".join(f"{i}->{self.text(i)}" for i in self.ids[:8])

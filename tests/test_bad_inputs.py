@@ -767,12 +767,20 @@ CASES: list[Case] = [
         "compare", "{t}/a.json", "{t}/a.json")), CLEAR, "is not scored"),  # was: KeyError 'instances' traceback
     Case("compare/method-without-scores", prepared(a_json("a.json", {"methods": {"m": {}}}), cli(
         "compare", "{t}/a.json", "{t}/a.json")), CLEAR, "has no 'per_scene'"),  # was: KeyError 'per_scene' traceback
+    Case("compare/level-1.5", prepared(a_json("a.json", {"per_scene": {"robot/scene_0000": {
+        "instances": [{"gt": 1, "IoU": 0.5}], "false_positives": {"spurious": 0}}}}), cli(
+        "compare", "{t}/a.json", "{t}/a.json", "--level", "1.5")), CLEAR,
+         "--level must be in (0, 1), got 1.5"),  # was: "level must be in (0, 1)" (the parameter, not the option)
     # ---- scenes
     Case("scenes/out-empty", prepared(a_sequence(), in_tmp(cli("scenes", "davis", "{t}/seq", "--out", "", "--length", "3"))),
          CLEAR, "--out is empty", absent=("seq_00000",)),  # was: scenes written into the current folder, exit 0
     Case("scenes/frames-mixed-sizes", prepared(a_sequence(mixed=True), cli(
         "scenes", "davis", "{t}/seq", "--out", "{t}/o", "--length", "3", "--stride", "3")), CLEAR,
          "00001.png is 100x80", absent=("o",)),  # was: a scene of 160x120 and 100x80 frames written, exit 0
+    Case("scenes/length-0", prepared(a_sequence(), cli("scenes", "davis", "{t}/seq", "--out", "{t}/o", "--length", "0")),
+         CLEAR, "--length must be >= 2, got 0", absent=("o",)),  # was: "need length >= 2, ..." (the parameter, not the option)
+    Case("scenes/stride-0", prepared(a_sequence(), cli("scenes", "davis", "{t}/seq", "--out", "{t}/o", "--stride", "0")),
+         CLEAR, "--stride must be >= 1, got 0", absent=("o",)),  # was: "need length >= 2, stride >= 1, ..." (no option named)
     # ---- batch
     Case("batch/out-empty", in_tmp(cli("batch", "{a}/clip.mp4", "--out", "", "--workers", "1", *SEG)), CLEAR,
          "--out is empty", absent=("batch.jsonl", "clip")),  # was: clip/ and batch.jsonl written into the current folder, exit 0
@@ -865,6 +873,10 @@ CASES: list[Case] = [
         absent=("gt.jpg",)),  # was: wrote an 8-bit JPEG (ids 3000 and 5000 read back as 255)
     Case("eval-api/boundary-tolerance-negative", api(lambda t: __import__("motionbits.eval").eval.boundary_tolerance(
         (480, 640), -0.01)), CLEAR, "fraction must be a finite number >= 0"),  # was: -8 pixels
+    Case("eval-api/summarize-dicts", api(lambda t: __import__("motionbits.eval").eval.summarize([{"IoU": 0.5}])),
+         CLEAR, "frames[0] is dict"),  # was: AttributeError 'dict' object has no attribute 'n_gt' traceback
+    Case("eval-api/boundary-map-valid-shape", api(lambda t: __import__("motionbits.eval").eval.boundary_map(
+        _LAB, np.ones((10, 40), bool))), CLEAR, "valid has shape (10, 40), the label map (20, 20)"),  # was: numpy broadcast error
     # ---- somprompt
     Case("somprompt/draw-70000-ids", api(lambda t: _draw(_many_ids(70_000))), CORRECT,
          check=lambda o, t: (len(o.value.placements) == 256 and len(o.value.dropped) == 70_000 - 256
@@ -947,6 +959,12 @@ CASES: list[Case] = [
         __import__("somprompt").MarkRegistry())), CLEAR, "obj_id must be a whole number"),  # was: 1, the mark of id 3
     Case("somprompt/registry-id-for-number-fraction", api(lambda t: (lambda r: (r.register([3, 5]), r.id_for_number(1.5))[1])(
         __import__("somprompt").MarkRegistry())), CLEAR, "number must be a whole number"),  # was: 3, the id of mark 1
+    Case("somprompt/registry-frames-seen-fraction", api(lambda t: (lambda r: (r.update(_LAB, frame_index=4), r.frames_seen(3.7))[1])(
+        __import__("somprompt").MarkRegistry())), CLEAR, "obj_id must be a whole number"),  # was: [4], the frames of id 3
+    Case("somprompt/palette-one-str", api(lambda t: __import__("somprompt").ColorPalette("#ff0000")), CLEAR,
+         "ColorPalette(['#ff0000'])"),  # was: "colour '#' is not of the form '#rrggbb'" (the str read char by char)
+    Case("somprompt/palette-none-colour", api(lambda t: __import__("somprompt").ColorPalette([None])), CLEAR,
+         "colors must be a sequence of colours"),  # was: 'NoneType' object is not iterable
     Case("somprompt/mark-text-fraction", api(lambda t: __import__("somprompt").mark_text(1.5)), CLEAR,
          "number must be a whole number"),  # was: '1'
     Case("somprompt/mark-text-bool", api(lambda t: __import__("somprompt").mark_text(True)), CLEAR,

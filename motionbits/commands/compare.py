@@ -92,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
                                          format_scene_changes, scene_changes)
     from motionbits.eval.table import json_ready
 
+    if not 0.0 < args.level < 1.0:  # else the library's message names ``level``
+        raise ValueError(f"--level must be in (0, 1), got {args.level:g}")
     if args.scenes < 0:
         raise ValueError(f"--scenes must be >= 0, got {args.scenes}")
     if args.json is not None:

@@ -36,6 +36,12 @@ def run(args: argparse.Namespace) -> int:
     from motionbits.eval.sequences import scenes_from_sequence
     from motionbits.outputs import check_named
 
+    if args.length < 2:  # else the library's message names ``length``, not the option
+        raise ValueError(f"--length must be >= 2, got {args.length}")
+    if args.stride < 1:
+        raise ValueError(f"--stride must be >= 1, got {args.stride}")
+    if args.max_side < 0:
+        raise ValueError(f"--max-side must be >= 0, got {args.max_side}")
     check_named(args.out, "--out", "folder")  # else the current folder
     scenes = scenes_from_sequence(args.src, args.out, length=args.length, stride=args.stride,
                                   max_side=args.max_side)

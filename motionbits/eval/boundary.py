@@ -72,6 +72,9 @@ def _differs(labels: np.ndarray, valid: np.ndarray | None, dy: int, dx: int) -> 
 
 
 def _edges(labels: np.ndarray, valid: np.ndarray | None) -> np.ndarray:
+    if valid is not None and valid.shape != labels.shape:  # else a numpy broadcast error
+        raise ValueError(f"valid has shape {valid.shape}, the label map {labels.shape}; "
+                         "they must be the same")
     edge = np.zeros(labels.shape, dtype=bool)
     h, w = labels.shape
     for dy, dx in _STEPS:

@@ -281,8 +281,16 @@ def summarize(frames: Iterable[FrameScores]) -> dict:
         "n_images": int, "n_instances": int}`` with keys ``METRIC_KEYS`` and ``FP_KEYS``;
         fractions in [0, 1] except ``spurious`` (a mean count per image). The macro block is
         NaN when there is no GT instance; the others when there is no image.
+
+    Raises:
+        TypeError: an item of ``frames`` is no :class:`FrameScores` (a dict gave an
+            AttributeError traceback).
     """
     frames = list(frames)
+    bad = next((i for i, f in enumerate(frames) if not isinstance(f, FrameScores)), None)
+    if bad is not None:
+        raise TypeError(f"frames must be FrameScores of evaluate_frame; frames[{bad}] is "
+                        f"{type(frames[bad]).__name__} {frames[bad]!r:.40}")
     n_inst = sum(f.n_gt for f in frames)
     macro: dict[str, float] = {}
     for key, attr in INSTANCE_KEYS.items():
