@@ -146,10 +146,11 @@ def moved_once(origins: dict[int, Origin], ids: Iterable[int], labels: np.ndarra
     moved = set()
     for i in ids:
         origin = origins.get(int(i))
+        if origin is None:
+            continue
         mask = (labels == i) & valid
         box = nonzero_box(mask)
-        if origin is None or box[0].start == box[0].stop or busy[grow_box(box, reach,
-                                                                           mask.shape)].any():
+        if box[0].start == box[0].stop or busy[grow_box(box, reach, mask.shape)].any():
             continue
         # it stands still now: both accumulated motions advance by the world's
         at_rest = Origin(origin.frame, origin.body @ world, origin.world @ world)

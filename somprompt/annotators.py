@@ -16,11 +16,12 @@ The constructor arguments are the style (palette, opacity, thickness, text scale
 
 from __future__ import annotations
 
-import numbers
 from typing import Mapping
 
 import cv2
 import numpy as np
+
+from motionbits.frames import whole_number
 
 from .anchors import LabelPlacement, place_labels
 from .colors import Color, ColorPalette, contrasting_color
@@ -62,13 +63,10 @@ def _check_thickness(thickness: int, name: str = "thickness", low: int = 1) -> i
     """``thickness`` as an int in [low, MAX_THICKNESS] (2.7 would otherwise draw 2 px, 10**9
     fail in OpenCV's "thickness <= MAX_THICKNESS" assertion, inf overflow); ``name`` for
     the messages (also checks ``text_padding``, in [0, MAX_THICKNESS])."""
-    if (isinstance(thickness, (bool, np.bool_)) or not isinstance(thickness, numbers.Real)
-            or not (isinstance(thickness, numbers.Integral) or float(thickness).is_integer())):
-        raise TypeError(f"{name} must be a whole number of pixels, got "
-                        f"{type(thickness).__name__} {thickness!r}")
+    thickness = whole_number(name, thickness)
     if not low <= thickness <= MAX_THICKNESS:
         raise ValueError(f"{name} must be in [{low}, {MAX_THICKNESS}] pixels, got {thickness!r:.40}")
-    return int(thickness)
+    return thickness
 
 
 #: Largest font scale: the automatic stroke width, ``round(2 * scale)``, must stay a line

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 from PIL import Image
 
-from motionbits.frames import sample_frame_indices
+from motionbits.frames import sample_frame_indices, whole_number
 
 from .anchors import LabelPlacement
 from .inputs import ImageLike, as_rgb_array, check_label_map, like_input
@@ -34,10 +34,8 @@ __all__ = [
 
 
 def _target_size(h: int, w: int, max_side: int | None) -> tuple[int, int]:
-    if max_side is not None and (isinstance(max_side, bool)
-                                 or not isinstance(max_side, (int, np.integer))):
-        raise TypeError(f"max_side must be a whole number of pixels or None, got "
-                        f"{type(max_side).__name__} {max_side!r}")
+    if max_side is not None:
+        max_side = whole_number("max_side", max_side)
     if max_side is None or max(h, w) <= max_side:
         return w, h
     if max_side < 1:

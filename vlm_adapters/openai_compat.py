@@ -38,6 +38,13 @@ def _check_image_format(image_format: Any) -> str:
     return "jpeg" if fmt == "jpg" else fmt
 
 
+def _check_max_side(value: Any, name: str) -> None:
+    """ValueError unless ``value`` is None or an int >= 1 (a longest image side, px)."""
+    if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Integral)
+                              or value < 1):
+        raise ValueError(f"{name} must be None or an int >= 1, got {value!r}")
+
+
 def encode_image_data_url(image: Any, image_format: str = "png", max_side: int | None = None) -> str:
     """One image as a ``data:image/...;base64,...`` URL.
 
@@ -47,9 +54,7 @@ def encode_image_data_url(image: Any, image_format: str = "png", max_side: int |
         image_format: ``"png"`` (lossless: set-of-mark numbers stay crisp) or ``"jpeg"`` (smaller).
         max_side: downscale so the longer side is at most this many pixels, >= 1 (None: keep size).
     """
-    if max_side is not None and (isinstance(max_side, bool) or not isinstance(max_side, numbers.Integral)
-                                 or max_side < 1):  # else 0 or -3 sent a 1x1 image
-        raise ValueError(f"max_side must be None or an int >= 1, got {max_side!r}")
+    _check_max_side(max_side, "max_side")  # else 0 or -3 sent a 1x1 image
     fmt = _check_image_format(image_format)  # else PIL's KeyError 'BOGUS'
     if not hasattr(image, "save"):  # an array: else "'numpy.ndarray' object has no attribute 'save'"
         from PIL import Image
@@ -99,9 +104,7 @@ class OpenAICompatibleVLM(BaseVLM):
         if not isinstance(base_url, str) or not base_url.startswith(("http://", "https://")):
             raise ValueError(f"base_url must be a str starting with http:// or https://, got {base_url!r}")
         _check_image_format(image_format)
-        if max_image_side is not None and (isinstance(max_image_side, bool) or
-                                           not isinstance(max_image_side, numbers.Integral) or max_image_side < 1):
-            raise ValueError(f"max_image_side must be None or an int >= 1, got {max_image_side!r}")
+        _check_max_side(max_image_side, "max_image_side")
         if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
                                     or not timeout > 0):
             raise ValueError(f"timeout must be None or a number of seconds > 0, got {timeout!r}")
