@@ -439,6 +439,13 @@ def a_sequence(mixed: bool = False) -> Callable[[Path], None]:
     return setup
 
 
+def _pred_in_tmp(tmp: Path) -> None:
+    """The perfect predictions of assets/pred in tmp itself (tmp/robot/scene_0000.png)."""
+    import shutil
+
+    shutil.copytree(tmp.parent / "assets" / "pred" / "robot", tmp / "robot")
+
+
 def eval_json_f1(value: float) -> Callable[[Outcome, Path], bool]:
     def check(o: Outcome, tmp: Path) -> bool:
         scores = json.loads((tmp / "s.json").read_text())
@@ -687,6 +694,16 @@ CASES: list[Case] = [
         "eval", "--pred", "{a}/pred", "--gt", "{a}/data", "--json", "{t}/j")), CLEAR, "is a folder"),
     Case("eval/json-empty", cli("eval", "--pred", "{a}/pred", "--gt", "{a}/data", "--quiet", "--json", ""), CLEAR,
          "--json is empty"),  # was: scored, no JSON written, exit 0
+    Case("eval/pred-empty", prepared(_pred_in_tmp, in_tmp(cli(
+        "eval", "--pred", "", "--gt", "{a}/data", "--quiet"))), CLEAR,
+         "--pred is empty"),  # was: the current folder scored as the prediction
+    Case("eval/pred-name-dir-empty", prepared(_pred_in_tmp, in_tmp(cli(
+        "eval", "--pred", "x=", "--gt", "{a}/data", "--quiet"))), CLEAR,
+         "DIR of NAME=DIR is empty"),  # was: the current folder scored as the prediction
+    Case("eval/pred-name-empty", cli("eval", "--pred", "={a}/pred", "--gt", "{a}/data", "--quiet"), CLEAR,
+         "NAME of NAME=DIR is empty"),  # was: scored in a row with no name, exit 0
+    Case("eval/gt-empty", cli("eval", "--pred", "{a}/pred", "--gt", "", "--quiet"), CLEAR,
+         "--gt is empty"),  # was: the current folder searched for scenes
     Case("eval/duplicate-names", cli("eval", "--pred", "x={a}/pred", "--pred", "x={a}/pred", "--gt", "{a}/data", "--quiet"),
          CLEAR, "share the name"),
     Case("eval/no-prediction-for-scene", prepared(lambda t: (t / "p").mkdir(), cli(
@@ -771,6 +788,21 @@ CASES: list[Case] = [
         "instances": [{"gt": 1, "IoU": 0.5}], "false_positives": {"spurious": 0}}}}), cli(
         "compare", "{t}/a.json", "{t}/a.json", "--level", "1.5")), CLEAR,
          "--level must be in (0, 1), got 1.5"),  # was: "level must be in (0, 1)" (the parameter, not the option)
+    Case("compare/iou-null", prepared(a_json("a.json", {"per_scene": {"robot/scene_0000": {
+        "instances": [{"gt": 1, "IoU": None}], "false_positives": {"spurious": 0}}}}), cli(
+        "compare", "{t}/a.json", "{t}/a.json")), CLEAR,
+         "body 1 has IoU None; an IoU is a number in [0, 1]"),  # was: mIoU nan, delta +nan, exit 0
+    Case("compare/iou-above-1", prepared(a_json("a.json", {"per_scene": {"robot/scene_0000": {
+        "instances": [{"gt": 1, "IoU": 7}], "false_positives": {"spurious": 0}}}}), cli(
+        "compare", "{t}/a.json", "{t}/a.json")), CLEAR,
+         "has IoU 7"),  # was: mIoU 700.0, exit 0
+    Case("compare/spurious-str", prepared(a_json("a.json", {"per_scene": {"robot/scene_0000": {
+        "instances": [{"gt": 1, "IoU": 0.5}], "false_positives": {"spurious": "x"}}}}), cli(
+        "compare", "{t}/a.json", "{t}/a.json")), CLEAR,
+         "has spurious 'x'"),  # was: "the resolved dtypes are not compatible with add.reduce"
+    Case("compare/not-utf8", prepared(lambda t: (t / "a.json").write_bytes(b"\x00\xdb\xff" * 20), cli(
+        "compare", "{t}/a.json", "{t}/a.json")), CLEAR,
+         "a.json is not a text file"),  # was: "'utf-8' codec can't decode byte 0xdb ..." (no file named)
     # ---- scenes
     Case("scenes/out-empty", prepared(a_sequence(), in_tmp(cli("scenes", "davis", "{t}/seq", "--out", "", "--length", "3"))),
          CLEAR, "--out is empty", absent=("seq_00000",)),  # was: scenes written into the current folder, exit 0
@@ -784,6 +816,20 @@ CASES: list[Case] = [
     # ---- batch
     Case("batch/out-empty", in_tmp(cli("batch", "{a}/clip.mp4", "--out", "", "--workers", "1", *SEG)), CLEAR,
          "--out is empty", absent=("batch.jsonl", "clip")),  # was: clip/ and batch.jsonl written into the current folder, exit 0
+    # ---- stack (checked before the trials: minutes of simulation)
+    Case("stack/json-empty", cli("stack", "--json", ""), CLEAR,
+         "--json is empty"),  # was: ran every trial, wrote no JSON, exit 0
+    Case("stack/json-is-a-folder", prepared(lambda t: (t / "j").mkdir(), cli("stack", "--json", "{t}/j")), CLEAR,
+         "is a folder"),  # was: "[Errno 21] Is a directory" after every trial
+    Case("stack/video-empty", in_tmp(cli("stack", "--video", "")), CLEAR,
+         "--video is empty"),  # was: the trial videos written into the current folder
+    Case("stack/video-is-a-file", prepared(a_file("v"), cli("stack", "--video", "{t}/v")), CLEAR,
+         "is a file, not a folder"),  # was: "[Errno 17] File exists" after the first trial
+    Case("stack/seed-negative", cli("stack", "--seed", "-1"), CLEAR,
+         "--seed must be >= 0, got -1"),  # was: "expected non-negative integer" (no option named)
+    Case("stack/method-twice", cli("stack", "--trials", "1", "--methods", "gt,gt", "--quiet", "--json", "{t}/s.json"),
+         CORRECT, check=lambda o, t: json.loads((t / "s.json").read_text())["methods"]["gt"]["trials"] == 1,
+         requires=mujoco_renders),  # was: 2 trials in gt's row for --trials 1 (each run twice)
     # ---- motionbits API: config
     Case("api/config-n_nodes-str", api(lambda t: _config(n_nodes="10000")), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-bool", api(lambda t: _config(n_nodes=True)), CLEAR, "n_nodes"),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 from motionbits.outputs import check_output_file, write_text_atomic
@@ -46,7 +47,10 @@ def load_run(path: str | Path, method: str | None = None) -> dict:
     """
     path = Path(path)
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:  # else "'utf-8' codec can't decode byte ..." (which file?)
+        raise ValueError(f"{path} is not a text file (not UTF-8): not a --json file of "
+                         "motionbits benchmark or eval") from None
     except json.JSONDecodeError as exc:
         raise ValueError(f"{path} is not JSON: {exc}") from exc
     if not isinstance(data, dict):
@@ -84,7 +88,22 @@ def _scored(path: Path, per_scene, method: str | None = None) -> dict:
     if bad is not None:
         raise ValueError(f"{where}: scene {bad!r} is not scored (no 'instances' of gt/IoU and "
                          "'false_positives'): not a --json file of motionbits benchmark or eval")
+    for key, v in per_scene.items():  # the values too: null read as NaN, 7 as 700%
+        for i in v["instances"]:
+            if not _is_number(i["IoU"]) or not 0 <= i["IoU"] <= 1:
+                raise ValueError(f"{where}: scene {key!r} body {i['gt']!r} has IoU "
+                                 f"{i['IoU']!r:.40}; an IoU is a number in [0, 1]")
+        spurious = v["false_positives"]["spurious"]
+        if not _is_number(spurious) or spurious < 0:
+            raise ValueError(f"{where}: scene {key!r} has spurious {spurious!r:.40}; it is a "
+                             "count of predicted objects, a number >= 0")
     return per_scene
+
+
+def _is_number(value) -> bool:
+    """A finite int or float, not a bool (JSON's true) nor a str."""
+    return (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value))
 
 
 def run(args: argparse.Namespace) -> int:

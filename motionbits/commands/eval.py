@@ -38,9 +38,18 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def parse_pred_spec(spec: str) -> tuple[str, Path]:
-    """``"name=dir"`` -> (name, dir); ``"dir"`` -> (folder name, dir)."""
+    """``"name=dir"`` -> (name, dir); ``"dir"`` -> (folder name, dir).
+
+    Raises:
+        ValueError: an empty spec, NAME or DIR (``Path("")`` is the current folder).
+    """
+    if not spec.strip():
+        raise ValueError("--pred is empty; name the prediction folder")
     if "=" in spec and not Path(spec).exists():
         name, _, folder = spec.partition("=")
+        if not name.strip() or not folder.strip():
+            raise ValueError(f"--pred {spec!r}: {'NAME' if not name.strip() else 'DIR'} of "
+                             "NAME=DIR is empty")
         return name, Path(folder)
     path = Path(spec)
     return path.resolve().name, path
@@ -53,15 +62,19 @@ def run(args: argparse.Namespace) -> int:
 
     if args.json is not None:
         check_output_file(args.json, "--json")
-    results = {}
+    if not args.gt.strip():  # else the current folder
+        raise ValueError("--gt is empty; name the ground-truth folder")
+    preds = {}  # every --pred checked before any is scored
     for spec in args.pred:
         name, folder = parse_pred_spec(spec)
         if not folder.is_dir():
             raise FileNotFoundError(f"prediction folder not found: {folder}")
-        if name in results:
+        if name in preds:
             raise ValueError(f"two --pred share the name {name!r}; use NAME=DIR")
-        results[name] = evaluate_dataset(args.gt, folder, missing=args.missing,
-                                         progress=not args.quiet)
+        preds[name] = folder
+    results = {name: evaluate_dataset(args.gt, folder, missing=args.missing,
+                                      progress=not args.quiet)
+               for name, folder in preds.items()}
     print(format_table(results, block="macro"), end="")
     if args.pooled:
         print()

@@ -7,6 +7,9 @@ import json
 import time
 from pathlib import Path
 
+from motionbits.errors import InputError
+from motionbits.outputs import check_named, check_output_file, write_text_atomic
+
 __all__ = ["register", "run"]
 
 
@@ -37,11 +40,21 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     from motionbits.stacking.run import format_table, run_stacking, summarise
 
-    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    # a method named twice runs once (as in benchmark), not twice into one row
+    methods = list(dict.fromkeys(m.strip() for m in args.methods.split(",") if m.strip()))
     if not methods:
         raise ValueError("--methods is empty")
     if args.trials < 1:
         raise ValueError(f"--trials must be >= 1, got {args.trials}")
+    if args.seed < 0:  # numpy's seed sequence refuses it ("expected non-negative integer")
+        raise InputError(f"--seed must be >= 0, got {args.seed}")
+    # the outputs are checked before the trials (minutes of simulation), not after
+    if args.json is not None:
+        check_output_file(args.json, "--json")
+    if args.video is not None:
+        check_named(args.video, "--video", "folder")  # else the current folder
+        if Path(args.video).exists() and not Path(args.video).is_dir():
+            raise InputError(f"--video {args.video} is a file, not a folder")
     t0 = time.perf_counter()
     try:
         results = run_stacking(methods, args.trials, args.seed, video_dir=args.video,
@@ -53,6 +66,6 @@ def run(args: argparse.Namespace) -> int:
     summary["wall_seconds"] = round(time.perf_counter() - t0, 1)
     print(format_table(summary))
     print(f"{args.trials} trials x {len(methods)} methods in {summary['wall_seconds']:.0f} s")
-    if args.json:
-        Path(args.json).write_text(json.dumps(summary, indent=1))
+    if args.json is not None:
+        write_text_atomic(args.json, json.dumps(summary, indent=1))
     return 0
