@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motionbits.frames import whole_number
+
 __all__ = ["GraspProposal", "grasp_from_mask", "grasp_proposals"]
 
 
@@ -74,11 +76,14 @@ def grasp_from_mask(mask: np.ndarray) -> GraspProposal:
         then whatever the eigen-decomposition returns (deterministic for one input).
 
     Raises:
-        ValueError: ``mask`` is not 2-D or has no pixel set.
+        ValueError: ``mask`` is not 2-D, holds NaN or has no pixel set.
     """
     mask = np.asarray(mask)
     if mask.ndim != 2:
         raise ValueError(f"mask must be a 2-D (H, W) array, got shape {mask.shape}")
+    if mask.dtype.kind in "fc" and not np.isfinite(mask).all():  # NaN is non-zero: "object"
+        raise ValueError("mask holds NaN or infinite values; a mask is 0 (background) or "
+                         "non-zero (object)")
     ys, xs = np.nonzero(mask)
     if xs.size == 0:
         raise ValueError("mask is empty: no pixel to grasp")
@@ -114,11 +119,17 @@ def grasp_proposals(labels: np.ndarray, min_area: int = 1) -> list[tuple[int, Gr
         first) -- the greedy order of Supplement B's stacking controller.
 
     Raises:
-        ValueError: ``labels`` is not a 2-D integer array, or ``min_area < 1``.
+        ValueError: ``labels`` is not a 2-D integer array or holds negative ids, or
+            ``min_area < 1``.
+        TypeError: ``min_area`` is not a whole number.
     """
     labels = np.asarray(labels)
     if labels.ndim != 2 or not np.issubdtype(labels.dtype, np.integer):
         raise ValueError(f"labels must be a 2-D integer (H, W) array, got {labels.dtype} {labels.shape}")
+    if labels.size and labels.min() < 0:  # else a grasp of "object" -1
+        raise ValueError(f"labels holds negative ids (min {labels.min()}); ids must be >= 0 "
+                         "(0 = background)")
+    min_area = whole_number("min_area", min_area)  # NaN kept no region, 1.5 and True passed
     if min_area < 1:
         raise ValueError(f"min_area must be >= 1, got {min_area}")
     ids, counts = np.unique(labels[labels != 0], return_counts=True)

@@ -27,6 +27,8 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
+from motionbits.frames import whole_number
+
 __all__ = [
     "Instance",
     "MissingDependencyError",
@@ -217,13 +219,14 @@ def instance_from_mask(mask: np.ndarray, id: int, *, rle: bool = False, **fields
     m = np.asarray(mask, dtype=bool)
     if m.ndim != 2:
         raise ValueError(f"mask must be (H, W), got shape {m.shape}")
+    id = _object_id(id, "id")
     ys, xs = np.nonzero(m)
     if xs.size:
         bbox = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
         centroid = (float(xs.mean()), float(ys.mean()))
     else:
         bbox, centroid = (0, 0, 0, 0), (float("nan"), float("nan"))
-    return Instance(id=int(id), bbox=bbox, area=int(xs.size), centroid=centroid,
+    return Instance(id=id, bbox=bbox, area=int(xs.size), centroid=centroid,
                     mask=None if rle else m, rle=encode_rle(m) if rle else None, **fields)
 
 
@@ -234,14 +237,41 @@ def instances_from_labels(labels: np.ndarray, *, rle: bool = False) -> list[Inst
     return [instance_from_mask(lm == i, int(i), rle=rle) for i in np.unique(lm) if i > 0]
 
 
+def _object_id(value: Any, name: str) -> int:
+    """An object id as an int: a whole number >= 1 (0 is the background)."""
+    value = whole_number(name, value)  # 2.7 was id 2, True id 1
+    if value < 1:
+        raise ValueError(f"{name} must be >= 1 (0 is the background), got {value}")
+    return value
+
+
 def labels_from_instances(objects: Iterable[Instance], shape: tuple[int, int]) -> np.ndarray:
-    """(H, W) int32 label map of ``objects`` (later objects drawn over earlier ones)."""
-    out = np.zeros(shape[:2], np.int32)
-    for obj in objects:
+    """(H, W) int32 label map of ``objects`` (later objects drawn over earlier ones).
+
+    Raises:
+        TypeError / ValueError: ``shape`` is not (H, W) whole numbers >= 0, an object is not
+            an :class:`Instance`, or its id is not a whole number in 1 .. 2**31 - 1 (int32).
+    """
+    if isinstance(shape, (str, bytes)) or not hasattr(shape, "__len__") or len(shape) < 2:
+        raise TypeError(f"shape must be (H, W), got {shape!r:.40}")
+    h, w = (whole_number(f"shape[{i}]", v) for i, v in enumerate(shape[:2]))
+    if h < 0 or w < 0:
+        raise ValueError(f"shape must be (H, W) >= 0, got {tuple(shape)!r}")
+    if objects is None or isinstance(objects, (str, bytes, Instance)):
+        raise TypeError(f"objects must be a list of Instance, got {type(objects).__name__}")
+    out = np.zeros((h, w), np.int32)
+    for k, obj in enumerate(objects):
+        if not isinstance(obj, Instance):
+            raise TypeError(f"objects[{k}] is {type(obj).__name__}, not an Instance "
+                            "(instance_from_mask(mask, id) makes one of a mask)")
+        oid = _object_id(obj.id, f"objects[{k}].id")
+        if oid > np.iinfo(np.int32).max:  # else numpy's OverflowError
+            raise ValueError(f"objects[{k}].id {oid} does not fit the int32 label map "
+                             f"(at most {np.iinfo(np.int32).max})")
         m = obj.get_mask()
         if m.shape != out.shape:
             raise ValueError(f"instance {obj.id} has a {m.shape} mask; the label map is {out.shape}")
-        out[m] = obj.id
+        out[m] = oid
     return out
 
 
@@ -260,7 +290,15 @@ def decode_rle(rle: dict) -> np.ndarray:
     mask_util = require("pycocotools.mask", "coco")
     if not isinstance(rle, dict) or "size" not in rle or "counts" not in rle:
         raise ValueError("rle must be a dict with 'size' [H, W] and 'counts' (COCO run-length encoding)")
+    size = rle["size"]
+    if (isinstance(size, (str, bytes)) or not hasattr(size, "__len__") or len(size) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0 for v in size)):
+        # else pycocotools' OverflowError "can't convert negative value to siz"
+        raise ValueError(f"rle['size'] must be [H, W], two whole numbers >= 0, got {size!r:.40}")
     counts = rle["counts"]
+    if not isinstance(counts, (str, bytes, list)):
+        raise TypeError(f"rle['counts'] must be a str, bytes or a list of run lengths, got "
+                        f"{type(counts).__name__}")
     if isinstance(counts, list):  # uncompressed RLE
         coded = mask_util.frPyObjects(rle, *rle["size"])
     else:

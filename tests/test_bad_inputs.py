@@ -439,6 +439,12 @@ def a_sequence(mixed: bool = False) -> Callable[[Path], None]:
     return setup
 
 
+def _copy(tmp: Path, asset: str, name: str) -> Path:
+    """assets/``asset`` copied to tmp/``name``."""
+    (tmp / name).write_bytes((tmp.parent / "assets" / asset).read_bytes())
+    return tmp / name
+
+
 def _pred_in_tmp(tmp: Path) -> None:
     """The perfect predictions of assets/pred in tmp itself (tmp/robot/scene_0000.png)."""
     import shutil
@@ -816,6 +822,21 @@ CASES: list[Case] = [
     # ---- batch
     Case("batch/out-empty", in_tmp(cli("batch", "{a}/clip.mp4", "--out", "", "--workers", "1", *SEG)), CLEAR,
          "--out is empty", absent=("batch.jsonl", "clip")),  # was: clip/ and batch.jsonl written into the current folder, exit 0
+    Case("batch/input-empty", prepared(lambda t: (t / "c.mp4").write_bytes((t.parent / "assets" / "clip.mp4").read_bytes()),
+                                       in_tmp(cli("batch", "", "--out", "{t}/o", "--workers", "1", *SEG))), CLEAR,
+         "input path is empty", absent=("o",)),  # was: every video under the current folder segmented
+    Case("batch/engine-ray-without-ray", cli("batch", "{a}/clip.mp4", "--out", "{t}/o", "--engine", "ray",
+                                             patches=(without("ray"),)), CLEAR, "pip install 'motionbits[ray]'",
+         absent=("o",)),  # was: the same error, after an empty o/ was made
+    Case("batch/out-is-a-file", prepared(a_file("o"), cli("batch", "{a}/clip.mp4", "--out", "{t}/o")), CLEAR,
+         "is a file, not a folder"),  # was: "[Errno 17] File exists"
+    Case("batch-api/videos-named-like-batch-files", api(lambda t: [i.name for i in __import__(
+        "motionbits.batch").batch.expand_inputs([str(_copy(t, "clip.mp4", "batch.jsonl.mp4")),
+                                                 str(_copy(t, "clip.mp4", ".partial.mp4"))])]),
+         CORRECT, check=lambda o, t: [n[:-9] for n in o.value] == ["batch.jsonl", ".partial"]
+         and all(n[-9] == "-" for n in o.value)),  # stem-<8 hex>
+    # was: named batch.jsonl (its output renamed over the journal: "[Errno 21] Is a directory") and
+    # .partial (its output renamed onto the folder of unfinished outputs: the video failed)
     # ---- stack (checked before the trials: minutes of simulation)
     Case("stack/json-empty", cli("stack", "--json", ""), CLEAR,
          "--json is empty"),  # was: ran every trial, wrote no JSON, exit 0
@@ -901,6 +922,31 @@ CASES: list[Case] = [
     Case("api/read-image-corrupt", api(lambda t: ((t / "c.png").write_bytes(b"garbage"),
                                                  __import__("motionbits.video").video.read_image(t / "c.png"))),
          CLEAR, "could not read image"),
+    # ---- motionbits API: objects and grasps
+    Case("api/instance-from-mask-id-fraction", api(lambda t: __import__("motionbits").instance_from_mask(_LAB == 3, 2.7)),
+         CLEAR, "id must be a whole number"),  # was: an Instance of id 2
+    Case("api/instance-from-mask-id-0", api(lambda t: __import__("motionbits").instance_from_mask(_LAB == 3, 0)),
+         CLEAR, "id must be >= 1 (0 is the background)"),  # was: an Instance of id 0 (the background)
+    Case("api/labels-from-instances-id-huge", api(lambda t: __import__("motionbits").labels_from_instances(
+        [__import__("dataclasses").replace(__import__("motionbits").instance_from_mask(_LAB == 3, 3), id=2**40)], (20, 20))),
+         CLEAR, "does not fit the int32 label map"),  # was: OverflowError traceback from numpy
+    Case("api/labels-from-instances-id-negative", api(lambda t: __import__("motionbits").labels_from_instances(
+        [__import__("dataclasses").replace(__import__("motionbits").instance_from_mask(_LAB == 3, 3), id=-1)], (20, 20))),
+         CLEAR, "objects[0].id must be >= 1"),  # was: a label map holding id -1
+    Case("api/labels-from-instances-masks", api(lambda t: __import__("motionbits").labels_from_instances([_LAB == 3], (20, 20))),
+         CLEAR, "objects[0] is ndarray, not an Instance"),  # was: AttributeError 'numpy.ndarray' object has no attribute 'get_mask'
+    Case("api/decode-rle-negative-size", api(lambda t: __import__("motionbits").decode_rle({"size": [-2, 2], "counts": [1, 2]})),
+         CLEAR, "rle['size'] must be [H, W]",
+         requires=lambda: None if __import__("importlib").util.find_spec("pycocotools") else "pycocotools not installed"),
+    # was: OverflowError "can't convert negative value to siz" traceback from pycocotools
+    Case("api/grasp-min-area-nan", api(lambda t: __import__("motionbits").grasp_proposals(_LAB, min_area=float("nan"))),
+         CLEAR, "min_area must be a whole number"),  # was: [] (no region passes c >= nan)
+    Case("api/grasp-min-area-fraction", api(lambda t: __import__("motionbits").grasp_proposals(_LAB, min_area=1.5)),
+         CLEAR, "min_area must be a whole number"),  # was: accepted as 1.5 pixels
+    Case("api/grasp-negative-labels", api(lambda t: __import__("motionbits").grasp_proposals(-_LAB)),
+         CLEAR, "negative ids"),  # was: grasps of objects -3 and -5
+    Case("api/grasp-mask-nan", api(lambda t: __import__("motionbits").grasp_from_mask(np.where(_LAB == 3, 1.0, np.nan))),
+         CLEAR, "mask holds NaN"),  # was: a grasp of the whole image (NaN is non-zero)
     # ---- motionbits API: eval
     Case("eval-api/20000-ids", api(lambda t: _eval_many(20_000, (200, 200))), CORRECT,
          check=lambda o, t: o.value.n_gt == 20_000 and o.value.f1.min() == 1.0, limit=20),

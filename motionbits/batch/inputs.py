@@ -25,7 +25,8 @@ class BatchInput:
     Attributes:
         path: absolute path of a video file or of a folder of frames.
         name: output folder name, unique in the batch: the input's stem, or
-            ``stem-<8 hex of the path>`` where two inputs share a stem.
+            ``stem-<8 hex of the path>`` where two inputs share a stem or the stem is
+            that of the batch's own files (``batch.jsonl``, ``.partial``).
     """
 
     path: str
@@ -101,12 +102,15 @@ def expand_inputs(items: list[str], cwd: Path | None = None) -> list[BatchInput]
 
     Raises:
         FileNotFoundError: an item on the command line does not exist.
-        ValueError: a glob matches nothing, or nothing is left to process.
+        ValueError: an empty item, a glob that matches nothing, or nothing left to process.
     """
     base = (cwd or Path.cwd()).resolve()
     paths: list[str] = []
     seen = set()
     for item in items:
+        if not str(item).strip():  # Path("") is the current folder
+            raise ValueError(f"the input path is empty ({str(item)!r}); pass a video, a folder, "
+                             "a glob or a list file")
         for p in _expand(str(item), base, from_list=False):
             key = str(p.resolve())
             if key not in seen:
@@ -114,7 +118,13 @@ def expand_inputs(items: list[str], cwd: Path | None = None) -> list[BatchInput]
                 paths.append(key)
     if not paths:
         raise ValueError("the inputs hold no video (files, folders of frames or globs)")
+    from motionbits.batch.job import PARTIAL_DIR
+    from motionbits.batch.runner import JOURNAL_NAME
+
     stems = [Path(p).stem for p in paths]
     count = Counter(stems)
+    # a stem that names the batch's own files gets the suffix too (batch.jsonl.mp4 was
+    # written over the journal, .partial.mp4 into the folder of unfinished outputs)
+    count.update(s for s in stems if s in (JOURNAL_NAME, PARTIAL_DIR))
     return [BatchInput(p, s if count[s] == 1 else f"{s}-{hashlib.sha1(p.encode()).hexdigest()[:8]}")
             for p, s in zip(paths, stems)]

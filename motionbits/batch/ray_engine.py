@@ -12,11 +12,21 @@ from typing import Callable, Iterable
 from motionbits.batch.inputs import BatchInput
 from motionbits.batch.job import segment_job
 
-__all__ = ["run_ray", "segment_video_task", "TASK_RETRIES"]
+__all__ = ["import_ray", "run_ray", "segment_video_task", "TASK_RETRIES"]
 
 #: Times Ray runs a video again when its worker process dies (killed, out of memory, a
 #: node lost); then it is recorded as failed.
 TASK_RETRIES = 2
+
+
+def import_ray():
+    """The ``ray`` module; ImportError naming the extra if it is not installed (the
+    ``batch`` command calls it before it writes anything)."""
+    try:
+        import ray
+    except ImportError:
+        raise ImportError("--engine ray needs Ray: pip install 'motionbits[ray]'") from None
+    return ray
 
 
 def segment_video_task(item: BatchInput, out_dir: str, options: dict, progress) -> dict:
@@ -55,11 +65,7 @@ def run_ray(items: Iterable[BatchInput], out_dir: str, options: dict, *, address
             ``None`` starts a local Ray instance for this batch.
         workers: CPUs of the local instance (default: all); ignored with ``address``.
     """
-    try:
-        import ray
-    except ImportError:
-        raise ImportError("--engine ray needs Ray: pip install 'motionbits[ray]'") from None
-
+    ray = import_ray()
     started = not ray.is_initialized()
     if started:
         kwargs = {"address": address} if address else {"num_cpus": workers}

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from motionbits.commands.segment import _check_options, add_video_options
+from motionbits.errors import InputError
 from motionbits.outputs import check_named
 
 __all__ = ["register", "run"]
@@ -54,8 +56,14 @@ def run(args: argparse.Namespace) -> int:
     from motionbits.batch import expand_inputs, run_batch
 
     check_named(args.out, "--out", "folder")  # else the current folder
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise InputError(f"--out {args.out} is a file, not a folder")
     if args.address and args.engine != "ray":
         raise ValueError("--address needs --engine ray")
+    if args.engine == "ray":  # the extra is checked before --out is made
+        from motionbits.batch.ray_engine import import_ray
+
+        import_ray()
     own = {"inputs", "out", "engine", "workers", "address", "retry_failed", "quiet", "func",
            "command"}
     options = {k: v for k, v in vars(args).items() if k not in own}
