@@ -969,6 +969,18 @@ CASES: list[Case] = [
          CLEAR, "frames[0] is dict"),  # was: AttributeError 'dict' object has no attribute 'n_gt' traceback
     Case("eval-api/boundary-map-valid-shape", api(lambda t: __import__("motionbits.eval").eval.boundary_map(
         _LAB, np.ones((10, 40), bool))), CLEAR, "valid has shape (10, 40), the label map (20, 20)"),  # was: numpy broadcast error
+    Case("eval-api/tolerance-negative", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        _LAB, _LAB, tolerance=-1)), CLEAR, "tolerance must be >= 0"),  # was: "negative dimensions are not allowed"
+    Case("eval-api/tolerance-fraction", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        _LAB, _LAB, tolerance=1.5)), CLEAR, "tolerance must be a whole number"),  # was: read as 1 px
+    Case("eval-api/tolerance-huge", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        np.roll(_LAB, 1, axis=0), _LAB, tolerance=10**6).bf1.tolist()), CORRECT,
+         check=lambda o, t: o.value == [1.0, 1.0]),  # was: MemoryError "Unable to allocate 58.2 TiB"
+    Case("eval-api/boundary-tolerance-1d-shape", api(lambda t: __import__("motionbits.eval").eval.boundary_tolerance((480,))),
+         CLEAR, "shape must be (H, W, ...)"),  # was: IndexError traceback
+    Case("benchmark-api/max-scenes-0", api(lambda t: __import__("motionbits.eval.benchmark").eval.benchmark.run_benchmark(
+        t.parent / "assets" / "data", {"zero": lambda frames: np.zeros(frames[0].shape[:2], int)}, max_scenes=0,
+        progress=False)), CLEAR, "max_per_track must be >= 1"),  # was: no scene scored, every score NaN, no error
     # ---- somprompt
     Case("somprompt/draw-70000-ids", api(lambda t: _draw(_many_ids(70_000))), CORRECT,
          check=lambda o, t: (len(o.value.placements) == 256 and len(o.value.dropped) == 70_000 - 256

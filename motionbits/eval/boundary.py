@@ -46,6 +46,8 @@ def boundary_tolerance(shape: tuple[int, ...], fraction: float = 0.003) -> int:
     if (isinstance(fraction, bool) or not isinstance(fraction, numbers.Real)
             or not (math.isfinite(fraction) and fraction >= 0)):
         raise ValueError(f"fraction must be a finite number >= 0, got {fraction!r:.40}")
+    if len(shape) < 2:  # else IndexError "tuple index out of range"
+        raise ValueError(f"shape must be (H, W, ...), got {tuple(shape)!r}")
     h, w = int(shape[0]), int(shape[1])
     return int(math.ceil(fraction * math.hypot(h, w)))
 

@@ -27,6 +27,7 @@ from tqdm import tqdm
 from motionbits.eval.kinds import body_kinds, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
+from motionbits.frames import whole_number
 from motionbits.video import check_no_broken_links, frame_order, is_frame_file
 
 __all__ = [
@@ -67,8 +68,13 @@ def discover_scenes(root: str | os.PathLike, max_per_track: int | None = None) -
 
     Raises:
         FileNotFoundError: ``root`` does not exist.
-        ValueError: no scene found.
+        ValueError: no scene found, or ``max_per_track`` < 1.
+        TypeError: ``max_per_track`` is not a whole number.
     """
+    if max_per_track is not None:  # 0 or -1 kept no scene: every score NaN, no error
+        max_per_track = whole_number("max_per_track", max_per_track)
+        if max_per_track < 1:
+            raise ValueError(f"max_per_track must be >= 1 or None, got {max_per_track}")
     scenes = _find_scenes(Path(root))
     if max_per_track is None:
         return scenes

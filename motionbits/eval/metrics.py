@@ -44,6 +44,7 @@ F1 >= 0.75 is tested with a 1e-9 slack so that an exact 3/4 (e.g. P = 1, R = 0.6
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Iterable
 
@@ -55,6 +56,7 @@ from motionbits.eval.boundary import (
 )
 from motionbits.eval.matching import sparse_hungarian_match
 from motionbits.eval.overlap import contingency, pair_scores
+from motionbits.frames import whole_number
 
 __all__ = ["FrameScores", "evaluate_frame", "summarize", "METRIC_KEYS", "INSTANCE_KEYS", "FP_KEYS"]
 
@@ -168,7 +170,8 @@ def evaluate_frame(
         pred: (H, W) non-negative integer predicted labels, 0 = background; any label values.
         gt: (H, W) non-negative integer GT labels, 0 = background; any label values.
         ignore: optional (H, W) bool, True = pixel left out of both maps.
-        tolerance: boundary match tolerance in px; default ``ceil(0.003 * diagonal)``.
+        tolerance: boundary match tolerance in px, a whole number >= 0 (one beyond the
+            image's diagonal matches as the diagonal does); default ``ceil(0.003 * diagonal)``.
 
     Returns:
         :class:`FrameScores` with per-GT-instance arrays and the pooled block.
@@ -176,6 +179,10 @@ def evaluate_frame(
     Raises:
         ValueError / TypeError: shapes differ or a map is malformed.
     """
+    if tolerance is not None:
+        tolerance = whole_number("tolerance", tolerance)  # 1.5 and True were read as 1
+        if tolerance < 0:  # else numpy's "negative dimensions are not allowed"
+            raise ValueError(f"tolerance must be >= 0 px, got {tolerance}")
     c = contingency(pred, gt, ignore)
     pred = np.asarray(pred).astype(np.int64, copy=False)
     gt = np.asarray(gt).astype(np.int64, copy=False)
@@ -199,7 +206,10 @@ def evaluate_frame(
     p_idx = _index_map(pred, c.pred_ids, keep)
     nb_gt = boundary_counts(g_idx, k, keep)
     nb_pred = boundary_counts(p_idx, m, keep)
-    tol = boundary_tolerance(gt.shape) if tolerance is None else int(tolerance)
+    # a disk wider than the image's diagonal matches what the diagonal matches (every
+    # pixel): the kernel is capped there, not built at any size (10**6 px: 58 TiB)
+    tol = (boundary_tolerance(gt.shape) if tolerance is None
+           else min(tolerance, math.ceil(math.hypot(*gt.shape[:2]))))
     kernel = disk(tol)
     g_sl = ndimage.find_objects(g_idx.astype(np.int32), max_label=k) if k else []
     p_sl = ndimage.find_objects(p_idx.astype(np.int32), max_label=m) if m else []
