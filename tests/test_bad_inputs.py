@@ -553,6 +553,28 @@ _LAB[2:8, 2:8] = 3
 _LAB[10:18, 10:18] = 5
 
 
+def _seg():
+    """A demos Segmentation of two frames (no segmenter run): ids 3 and 5 in the last."""
+    from demos.segmentation import Segmentation
+
+    return Segmentation("clip.mp4", [0, 1], [np.zeros((20, 20, 3), np.uint8)] * 2, [_LAB, _LAB])
+
+
+def _zip(tmp, maps, indices):
+    from demos.media import write_labels_zip
+
+    return write_labels_zip(maps, indices, tmp / "labels.zip")
+
+
+def _fake_transformers(**kw):
+    """A TransformersVLM over a processor that would take anything (no torch)."""
+    from types import SimpleNamespace
+
+    from vlm_adapters.hf import TransformersVLM
+
+    return TransformersVLM(object(), SimpleNamespace(chat_template="{{ messages }}"), frames_as="images", **kw)
+
+
 # --------------------------------------------------------------------------- the table
 
 S = "segment"
@@ -1036,6 +1058,69 @@ CASES: list[Case] = [
         None, "what moved?")), CLEAR, "videos must be a list of videos"),  # was: "object of type 'NoneType' has no len()"
     Case("vlm/generate-batch-prompts-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate_batch(
         [_F], None)), CLEAR, "prompts must be a str or a list"),  # was: "'NoneType' object is not iterable"
+    Case("vlm/stub-prompt-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate(_F, None)), CLEAR,
+         "prompt must be a str"),  # was: recorded and answered (the real adapters refuse it)
+    Case("vlm/stub-max-new-tokens-0", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate(
+        _F, "q", max_new_tokens=0)), CLEAR, "max_new_tokens must be >= 1"),  # was: answered
+    Case("vlm/transformers-prompt-none", api(lambda t: _fake_transformers().generate(_F, None)), CLEAR,
+         "prompt must be a str"),  # was: "prompts must be a str or a list of str" (a parameter not passed)
+    Case("vlm/transformers-max-new-tokens-0", api(lambda t: _fake_transformers().generate(_F, "q", max_new_tokens=0)),
+         CLEAR, "max_new_tokens must be >= 1"),  # was: handed to model.generate
+    Case("vlm/transformers-fps-nan", api(lambda t: _fake_transformers(fps=float("nan"))), CLEAR,
+         "fps must be"),  # was: NaN sent as the video's frame rate
+    Case("vlm/internvideo-image-size-0", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
+        None, None, image_size=0)), CLEAR, "image_size must be >= 1"),  # was: failed in PIL's resize on the first frame
+    Case("vlm/internvideo-image-size-fraction", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
+        None, None, image_size=447.5)), CLEAR, "image_size must be a whole number"),  # was: 447 px
+    Case("vlm/internvideo-prompt-none", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
+        None, None).generate(_F, None)), CLEAR, "prompt must be a str"),  # was: "No module named 'torch'" / None sent
+    # ---- demos (agent tool, web app, files)
+    Case("demos/labels-zip-negative-ids", api(lambda t: _zip(t, [_LAB - 5], [0])), CLEAR,
+         "negative ids"),  # was: ids -5.. wrapped to 65531.. in the 16-bit PNG
+    Case("demos/labels-zip-ids-over-65535", api(lambda t: _zip(t, [_LAB * 100_000], [0])), CLEAR,
+         "at most 65535"),  # was: 300000 wrapped to 37856
+    Case("demos/labels-zip-more-maps-than-indices", api(lambda t: _zip(t, [_LAB, _LAB], [0])), CLEAR,
+         "one index per map"),  # was: the second map dropped
+    Case("demos/labels-zip-fractional-index", api(lambda t: _zip(t, [_LAB], [2.7])), CLEAR,
+         "whole numbers"),  # was: written as 00002.png
+    Case("demos/demo-clip-fractional-frames", api(lambda t: __import__("demos.media").media.write_demo_clip(
+        t / "c.mp4", n_frames=2.5)), CLEAR, "n_frames must be a whole number"),
+    # was: "'float' object cannot be interpreted as an integer"
+    Case("demos/demo-clip-size-0", api(lambda t: __import__("demos.media").media.write_demo_clip(
+        t / "c.mp4", n_frames=2, size=(0, 0))), CLEAR, "size must be"),  # was: OpenCV "inv_scale_x > 0"
+    Case("demos/stub-answer-empty", api(lambda t: __import__("demos.vlm").vlm.stub_answer([])), CLEAR,
+         "label_maps must be a non-empty list"),  # was: IndexError
+    Case("demos/answer-max-new-tokens-fraction", api(lambda t: __import__("demos.tool").tool.answer_question(
+        _seg(), "what moved?", max_new_tokens=2.5)), CLEAR, "max_new_tokens must be a whole number"),  # was: 2
+    Case("demos/answer-max-new-tokens-0", api(lambda t: __import__("demos.tool").tool.answer_question(
+        _seg(), "what moved?", max_new_tokens=0)), CLEAR, "max_new_tokens must be >= 1"),  # was: sent to the VLM
+    Case("demos/answer-question-empty", api(lambda t: __import__("demos.tool").tool.answer_question(_seg(), "")),
+         CLEAR, "question must be a non-empty string"),  # was: answered ('' and 5 were asked)
+    Case("demos/answer-seg-none", api(lambda t: __import__("demos.tool").tool.answer_question(None, "what moved?")),
+         CLEAR, "seg must be a Segmentation"),  # was: AttributeError "'NoneType' ... no attribute 'label_maps'"
+    Case("demos/describe-seg-none", api(lambda t: __import__("demos.tool").tool.describe_motionbits(None)),
+         CLEAR, "seg must be a Segmentation"),  # was: AttributeError
+    Case("demos/highlight-dim-nan", api(lambda t: __import__("demos.app").app.highlight(_seg(), [3], dim=float("nan"))),
+         CLEAR, "dim must be a number in [0, 1]"),  # was: a black frame (2: uint8 wrapped)
+    Case("demos/highlight-ids-fraction", api(lambda t: __import__("demos.app").app.highlight(_seg(), [3.5])),
+         CLEAR, "whole numbers"),  # was: id 3 highlighted
+    Case("demos/segment-window-config-dict", api(lambda t: __import__("demos.segmentation").segmentation.segment_window(
+        t, config={"max_side": 100})), CLEAR, "config must be a MotionBitsConfig"),  # was: AttributeError 'with_'
+    Case("demos/segment-window-progress-int", api(lambda t: __import__("demos.segmentation").segmentation.segment_window(
+        t.parent / "assets" / "frames", progress=5)), CLEAR,
+         "progress must be callable"),  # was: "'int' object is not callable" after the first frame
+    Case("demos/limits-max-mb-nan", api(lambda t: __import__("demos.app").app.DemoLimits(max_mb=float("nan"))),
+         CLEAR, "max_mb must be"),  # was: accepted, every upload passed the size check
+    Case("demos/config-nodes-negative", api(lambda t: __import__("demos.app").app.DemoConfig(n_nodes=-5)),
+         CLEAR, "n_nodes must be >= 16"),  # was: accepted (the page's slider default)
+    Case("demos/config-max-new-tokens-0", api(lambda t: __import__("demos.app").app.DemoConfig(max_new_tokens=0)),
+         CLEAR, "max_new_tokens must be >= 1"),  # was: accepted, sent with every question
+    Case("demos/check-video-not-a-path", api(lambda t: __import__("demos.app").app.check_video(
+        ["clip.mp4"], __import__("demos.app").app.DemoLimits())), CLEAR,
+         "video must be the path"),  # was: "expected str, bytes or os.PathLike object, not list"
+    Case("demos/app-step-bool", api(lambda t: __import__("demos.app").app._Handlers(
+        __import__("demos.app").app.DemoConfig(), t).run(str(t.parent / "assets" / "clip.mp4"), 400, 0, 0, True)[-1]),
+         CORRECT, check=lambda o, t: "Step must be a whole number" in o.value),  # was: True ran as step 1
 ]
 # --------------------------------------------------------------------------- tests
 
