@@ -566,6 +566,44 @@ def _zip(tmp, maps, indices):
     return write_labels_zip(maps, indices, tmp / "labels.zip")
 
 
+_M2 = np.zeros((2, 6, 6), bool)  # two overlapping instance masks
+_M2[0, :3], _M2[1, 2:] = True, True
+
+
+def _masks_to_labels(*a, **kw):
+    from vlm_adapters.grounding import masks_to_label_map
+
+    return masks_to_label_map(_M2, *a, **kw)
+
+
+def _yoloe(**kw):
+    """A YOLOEDetector around a placeholder model (no ultralytics, no torch)."""
+    from vlm_adapters.grounding import YOLOEDetector
+
+    return YOLOEDetector(object(), device="cpu", **kw)
+
+
+def _vlm_yoloe(**kw):
+    """vlm-yoloe with string options whose files do not exist (the option checks come first)."""
+    from vlm_adapters.plugin import vlm_yoloe_method
+
+    return vlm_yoloe_method(**{"vlm": "stub:- a cup: moved", "yoloe": "/nonexistent/yoloe-11l-seg.pt",
+                               "text_encoder": "/nonexistent/mobileclip_blt.ts", **kw})
+
+
+class _NoDetector:
+    def detect(self, image, phrases):
+        from vlm_adapters.grounding import Detections
+
+        return Detections.empty(*np.shape(image)[:2])
+
+
+def _method(**kw):
+    from vlm_adapters import StubVLM, TextGrounder, VLMYOLOEMethod
+
+    return VLMYOLOEMethod(kw.pop("vlm", StubVLM("- a cup: moved")), TextGrounder(_NoDetector()), **kw)
+
+
 def _fake_transformers(**kw):
     """A TransformersVLM over a processor that would take anything (no torch)."""
     from types import SimpleNamespace
@@ -1074,6 +1112,41 @@ CASES: list[Case] = [
         None, None, image_size=447.5)), CLEAR, "image_size must be a whole number"),  # was: 447 px
     Case("vlm/internvideo-prompt-none", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
         None, None).generate(_F, None)), CLEAR, "prompt must be a str"),  # was: "No module named 'torch'" / None sent
+    # ---- the YOLOE path (answer -> phrases -> masks)
+    Case("vlm/masks-to-labels-min-area-nan", api(lambda t: _masks_to_labels(min_area=float("nan"))), CLEAR,
+         "min_area must be a whole number"),  # was: every instance kept (NaN compares false)
+    Case("vlm/masks-to-labels-max-instances-negative", api(lambda t: _masks_to_labels(max_instances=-1)), CLEAR,
+         "max_instances must be >= 1"),  # was: an empty label map
+    Case("vlm/masks-to-labels-scores-nan", api(lambda t: _masks_to_labels(np.array([np.nan, 0.5]))), CLEAR,
+         "scores must be finite"),  # was: the NaN mask painted last, whatever its score
+    Case("vlm/yoloe-conf-nan", api(lambda t: _yoloe(conf=float("nan"))), CLEAR,
+         "conf must be a number in [0, 1]"),  # was: accepted, passed to predict on the first image
+    Case("vlm/yoloe-max-det-fraction", api(lambda t: _yoloe(max_det=2.5)), CLEAR,
+         "max_det must be a whole number"),  # was: accepted
+    Case("vlm/yoloe-text-encoder-int", api(lambda t: _yoloe(text_encoder=5)), CLEAR,
+         "text_encoder must be a file path"),  # was: "text encoder file '5' does not exist"
+    Case("vlm/grounder-detector-none", api(lambda t: __import__("vlm_adapters").TextGrounder(None)), CLEAR,
+         "detector must have detect"),  # was: AttributeError on the first answer
+    Case("vlm/grounder-min-area-negative", api(lambda t: __import__("vlm_adapters").TextGrounder(
+        _NoDetector(), min_area=-1)), CLEAR, "min_area must be >= 0"),  # was: accepted
+    Case("vlm/method-vlm-none", api(lambda t: _method(vlm=None)), CLEAR,
+         "vlm must have generate"),  # was: AttributeError on the first clip
+    Case("vlm/method-prompt-none", api(lambda t: _method(prompt=None)), CLEAR,
+         "prompt must be a non-empty str"),  # was: the stub was asked None
+    Case("vlm/method-num-frames-0", api(lambda t: _method(num_frames=0)), CLEAR,
+         "num_frames must be >= 1"),  # was: refused only on the first clip of the benchmark
+    Case("vlm/method-generate-kwargs-int", api(lambda t: _method(generate_kwargs=5)), CLEAR,
+         "generate_kwargs must be a dict"),  # was: "'int' object is not a mapping"
+    Case("vlm/vlm-yoloe-conf-nan", api(lambda t: _vlm_yoloe(conf="nan")), CLEAR,
+         "option 'conf' must be a number in [0, 1]"),  # was: accepted ('yoloe' file not found hid it)
+    Case("vlm/vlm-yoloe-imgsz-0", api(lambda t: _vlm_yoloe(imgsz="0")), CLEAR, "option 'imgsz' must be >= 1"),
+    Case("vlm/vlm-yoloe-max-new-tokens-0", api(lambda t: _vlm_yoloe(max_new_tokens="0")), CLEAR,
+         "option 'max_new_tokens' must be >= 1"),  # was: accepted, sent to the VLM
+    Case("vlm/vlm-yoloe-fps-negative", api(lambda t: _vlm_yoloe(fps="-1")), CLEAR, "option 'fps' must be a number > 0"),
+    Case("vlm/vlm-yoloe-num-frames-bool", api(lambda t: _vlm_yoloe(num_frames=True)), CLEAR,
+         "option 'num_frames' must be an integer"),  # was: True read as 1 frame
+    Case("vlm/vlm-yoloe-yoloe-int", api(lambda t: _vlm_yoloe(yoloe=5)), CLEAR,
+         "option 'yoloe' must be a file path"),  # was: "expected str, bytes or os.PathLike object, not int"
     # ---- demos (agent tool, web app, files)
     Case("demos/labels-zip-negative-ids", api(lambda t: _zip(t, [_LAB - 5], [0])), CLEAR,
          "negative ids"),  # was: ids -5.. wrapped to 65531.. in the 16-bit PNG
