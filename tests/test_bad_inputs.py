@@ -1112,6 +1112,35 @@ CASES: list[Case] = [
         None, None, image_size=447.5)), CLEAR, "image_size must be a whole number"),  # was: 447 px
     Case("vlm/internvideo-prompt-none", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
         None, None).generate(_F, None)), CLEAR, "prompt must be a str"),  # was: "No module named 'torch'" / None sent
+    Case("somprompt/to-hex-out-of-range", api(lambda t: __import__("somprompt").to_hex((300, 0, 0))), CLEAR,
+         "must be three numbers in [0, 255]"),  # was: '#12c0000' ((-1, 0, 0): '#-10000')
+    Case("somprompt/to-hex-fraction", api(lambda t: __import__("somprompt").to_hex((1.5, 0, 0))), CLEAR,
+         "whole numbers"),  # was: "Unknown format code 'x' for object of type 'float'"
+    Case("somprompt/contrast-ratio-none", api(lambda t: __import__("somprompt").contrast_ratio(None, (0, 0, 0))),
+         CLEAR, "must be three numbers"),  # was: IndexError "too many indices for array"
+    Case("somprompt/luminance-out-of-range", api(lambda t: __import__("somprompt").relative_luminance((300, 0, 0))),
+         CLEAR, "must be three numbers in [0, 255]"),  # was: 0.31 (documented in [0, 1], for a colour that is none)
+    Case("somprompt/distance-to-edge-3d", api(lambda t: __import__("somprompt").distance_to_edge(np.ones((4, 4, 3)))),
+         CLEAR, "mask must be (H, W)"),  # was: OpenCV "src.type() == CV_8UC1" (1-D: an empty array)
+    Case("somprompt/draw-registry-int", api(lambda t: __import__("somprompt").draw_marks(
+        np.zeros((20, 20, 3), np.uint8), _LAB, registry=5)), CLEAR,
+         "registry must be a somprompt.MarkRegistry"),  # was: "'int' object has no attribute 'register'"
+    Case("somprompt/mark-video-renderer-int", api(lambda t: __import__("somprompt").mark_video(
+        [np.zeros((20, 20, 3), np.uint8)], [_LAB], renderer=5)), CLEAR,
+         "renderer must be a somprompt.SetOfMarkRenderer"),  # was: "'int' object has no attribute 'render'"
+    Case("somprompt/mark-video-frames-none", api(lambda t: __import__("somprompt").mark_video(None, [_LAB])), CLEAR,
+         "frames must be a list"),  # was: "'NoneType' object is not iterable"
+    Case("somprompt/frames-for-vlm-none", api(lambda t: __import__("somprompt").frames_for_vlm(None)), CLEAR,
+         "frames must be a list"),  # was: "'NoneType' object is not iterable"
+    Case("somprompt/vqa-num-frames-0", api(lambda t: __import__("somprompt").GroundedVQA(
+        lambda f: [_LAB], __import__("vlm_adapters").StubVLM("ok"), num_frames=0)), CLEAR,
+         "num_frames must be >= 1"),  # was: refused by sample_for_vlm after segmenting
+    Case("somprompt/vqa-max-side-0", api(lambda t: __import__("somprompt").GroundedVQA(
+        lambda f: [_LAB], __import__("vlm_adapters").StubVLM("ok"), max_side=0)), CLEAR,
+         "max_side must be >= 1"),  # was: refused after segmenting
+    Case("somprompt/vqa-generation-int", api(lambda t: __import__("somprompt").GroundedVQA(
+        lambda f: [_LAB], __import__("vlm_adapters").StubVLM("ok"), generation=5)), CLEAR,
+         "generation must be a dict"),  # was: "'int' object is not iterable"
     # ---- the YOLOE path (answer -> phrases -> masks)
     Case("vlm/masks-to-labels-min-area-nan", api(lambda t: _masks_to_labels(min_area=float("nan"))), CLEAR,
          "min_area must be a whole number"),  # was: every instance kept (NaN compares false)
