@@ -16,6 +16,8 @@ import argparse
 import dataclasses
 import json
 import logging
+import math
+import numbers
 import os
 import tempfile
 from dataclasses import dataclass, field
@@ -25,11 +27,14 @@ from typing import Any
 import cv2
 import numpy as np
 
+from motionbits.frames import whole_number
 from motionbits.video_writer import write_h264
 from somprompt import draw_marks, mark_video
+from somprompt.registry import whole_ids
 
 from .media import write_demo_clip, write_labels_zip
-from .segmentation import MAX_VIDEO_SIDE, Segmentation, max_frames_for, segment_window
+from .segmentation import (MAX_VIDEO_SIDE, Segmentation, check_segmentation, check_window, max_frames_for,
+                           segment_window)
 from .tool import answer_question, describe_motionbits
 from .vlm import VLMError, make_vlm, vlm_spec_help
 
@@ -51,6 +56,15 @@ class DemoLimits:
     max_mb: float = 100.0
     max_side: int = MAX_VIDEO_SIDE
     max_frames: int = 300
+
+    def __post_init__(self) -> None:  # else a NaN max_mb let every upload through
+        if (isinstance(self.max_mb, bool) or not isinstance(self.max_mb, numbers.Real)
+                or not (math.isfinite(self.max_mb) and self.max_mb > 0)):
+            raise ValueError(f"max_mb must be a finite number > 0, got {self.max_mb!r}")
+        if not 1 <= whole_number("max_side", self.max_side) <= MAX_VIDEO_SIDE:
+            raise ValueError(f"max_side must be in [1, {MAX_VIDEO_SIDE}], got {self.max_side!r}")
+        if whole_number("max_frames", self.max_frames) < 2:
+            raise ValueError(f"max_frames must be >= 2, got {self.max_frames!r}")
 
     def text(self) -> str:
         return (f"video files up to {self.max_mb:g} MB, at most {self.max_side} px on the longer "
@@ -78,6 +92,13 @@ class DemoConfig:
     workdir: str | None = None
     examples: tuple[str, ...] = ()
 
+    def __post_init__(self) -> None:  # checked before the page is built, not on the first run
+        check_window(n_nodes=self.n_nodes)
+        if self.max_new_tokens is not None and whole_number("max_new_tokens", self.max_new_tokens) < 1:
+            raise ValueError(f"max_new_tokens must be >= 1 or None, got {self.max_new_tokens!r}")
+        if not isinstance(self.limits, DemoLimits):
+            raise TypeError(f"limits must be a DemoLimits, got {type(self.limits).__name__}")
+
 
 def check_video(path: str | None, limits: DemoLimits) -> tuple[int, tuple[int, int], float]:
     """Check an uploaded file against ``limits``; returns (frame count, (H, W), fps).
@@ -88,6 +109,8 @@ def check_video(path: str | None, limits: DemoLimits) -> tuple[int, tuple[int, i
     """
     if not path:
         raise ValueError("no video: upload a video file or pick an example")
+    if not isinstance(path, (str, os.PathLike)):  # else os.fspath's "expected str, bytes or os.PathLike"
+        raise ValueError(f"video must be the path of a video file, got {type(path).__name__} {path!r:.40}")
     p = Path(path)
     if not p.exists():
         raise ValueError(f"video not found: {p} (upload it again)")
@@ -135,6 +158,8 @@ def _whole(label: str, value: object, default: int | None = None) -> int:
     """A page field as a whole number (None: ``default``); ValueError naming the field."""
     if value is None and default is not None:
         return default
+    if isinstance(value, bool):  # else True read as 1
+        raise ValueError(f"{label} must be a whole number, got {value!r}")
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
@@ -161,7 +186,13 @@ def highlight(seg: Segmentation, ids: list[int], dim: float = 0.35) -> np.ndarra
     """The last frame with the MotionBits ``ids`` marked and everything else dimmed.
 
     Returns (H, W, 3) uint8 RGB; the marks use the numbers and colours of the overlay.
+    ``dim``: brightness kept outside the marks, in [0, 1].
     """
+    check_segmentation(seg)
+    ids = whole_ids(ids, "ids", "MotionBit ids")  # else [1.5] marked id 1
+    if (isinstance(dim, bool) or not isinstance(dim, numbers.Real)
+            or not (math.isfinite(dim) and 0 <= dim <= 1)):  # else NaN: black; 2: uint8 wrapped
+        raise ValueError(f"dim must be a number in [0, 1], got {dim!r}")
     frame, labels = seg.frames[-1], seg.label_maps[-1]
     keep = np.isin(labels, np.asarray(ids, dtype=np.int64)) if len(ids) else np.zeros(labels.shape, bool)
     marked = draw_marks(frame, np.where(keep, labels, 0), registry=seg.registry)
@@ -326,6 +357,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="longest answer in tokens (default: the VLM adapter's)")
     args = parser.parse_args(argv)
     os.environ.setdefault("GRADIO_ANALYTICS_ENABLED", "False")
+    try:  # --nodes 5 or --max-new-tokens 0: refused before a page is built
+        DemoConfig(n_nodes=args.nodes, max_new_tokens=args.max_new_tokens)
+    except ValueError as exc:
+        parser.error(str(exc).replace("n_nodes", "--nodes").replace("max_new_tokens", "--max-new-tokens"))
     config = DemoConfig(vlm=args.vlm, n_nodes=args.nodes, max_new_tokens=args.max_new_tokens,
                         workdir=tempfile.mkdtemp(prefix="motionbits-demo-"), examples=_examples_in_checkout())
     app = build_app(config)

@@ -18,7 +18,7 @@ from motionbits.video import IMAGE_SUFFIXES
 from somprompt import MarkRegistry
 
 __all__ = ["MAX_NODES", "MAX_VIDEO_SIDE", "MAX_WINDOW_FRAMES", "MAX_WINDOW_PIXELS", "Segmentation",
-           "check_frame_shape", "check_window", "max_frames_for", "segment_window"]
+           "check_frame_shape", "check_segmentation", "check_window", "max_frames_for", "segment_window"]
 
 #: Most frames one call processes (frames and label maps are kept in memory and returned) ...
 MAX_WINDOW_FRAMES = 300
@@ -77,6 +77,16 @@ class Segmentation:
     def last_ids(self) -> list[int]:
         """Ids of the MotionBits in the last processed frame, ascending."""
         return [int(i) for i in np.unique(self.label_maps[-1]) if i > 0]
+
+
+def check_segmentation(seg: object, name: str = "seg") -> "Segmentation":
+    """``seg`` if it is a :class:`Segmentation` with at least one frame (else ``None.label_maps``
+    failed deep inside); TypeError / ValueError naming ``name`` otherwise."""
+    if not isinstance(seg, Segmentation):
+        raise TypeError(f"{name} must be a Segmentation (from segment_window), got {type(seg).__name__}")
+    if not seg.label_maps or not seg.frames:
+        raise ValueError(f"{name} holds no segmented frame")
+    return seg
 
 
 def _int_arg(name: str, value: object, minimum: int, allow_none: bool = False) -> int | None:
@@ -180,6 +190,10 @@ def segment_window(video: "str | os.PathLike", *, start: int = 0, frames: int | 
             the window, or more than ``max_frames_for(H, W)``.
     """
     start, frames, every, n_nodes = check_window(start, frames, every, n_nodes)
+    if config is not None and not isinstance(config, MotionBitsConfig):  # else "'dict' ... no attribute 'with_'"
+        raise TypeError(f"config must be a MotionBitsConfig or None, got {type(config).__name__}")
+    if progress is not None and not callable(progress):  # else "not callable" after the first frame
+        raise TypeError(f"progress must be callable as progress(done, total) or None, got {type(progress).__name__}")
     path = _check_video(video)
     cfg = (config or MotionBitsConfig()).with_(n_nodes=n_nodes)
     declared = _declared_size(path)

@@ -18,9 +18,11 @@ import numpy as np
 from PIL import Image
 
 from motionbits import MotionBitsConfig, grasp_from_mask, instance_from_mask
+from motionbits.frames import whole_number
 from somprompt import GroundedVQA, draw_marks
+from somprompt.registry import whole_ids
 
-from .segmentation import Segmentation, segment_window
+from .segmentation import Segmentation, check_segmentation, segment_window
 from .vlm import VLMError, make_vlm, stub_answer
 
 __all__ = ["Answer", "answer_question", "ask_about_motion", "cited_records", "describe_motionbits",
@@ -39,7 +41,7 @@ def describe_motionbits(seg: Segmentation) -> list[dict[str, Any]]:
     RLE); ``grasp`` {``center`` [x, y], ``angle`` rad of the closing direction from +x
     towards +y, ``width`` px opening} as in the paper's tower-stacking controller.
     """
-    labels = seg.label_maps[-1]
+    labels = check_segmentation(seg).label_maps[-1]
     registry = seg.registry
     records = []
     for i in seg.last_ids:
@@ -149,12 +151,16 @@ def ask_about_motion(video: "str | os.PathLike", question: str, *, vlm: "str | A
         ValueError: an empty question, a bad argument or an unreadable / too short video.
         VLMError: an unusable VLM spec, or the VLM failed or answered no text.
     """
-    if not isinstance(question, str) or not question.strip():
-        raise ValueError("question must be a non-empty string")
+    _check_question(question)
     seg = segment_window(video, start=start, frames=frames, every=every, n_nodes=n_nodes)
     result = answer_question(seg, question, vlm)
     return {"question": question, "answer": result.answer, "vlm": _vlm_name(result.vlm),
             "cited": cited_records(seg, result.cited_ids)}
+
+
+def _check_question(question: object) -> None:
+    if not isinstance(question, str) or not question.strip():
+        raise ValueError("question must be a non-empty string")
 
 
 @dataclass
@@ -179,8 +185,14 @@ def answer_question(seg: Segmentation, question: str, vlm: "str | Any | None" = 
     """GroundedVQA on an already segmented window (``seg``'s label maps, no second run).
 
     ``vlm`` as in :func:`ask_about_motion`; ``max_new_tokens`` caps the answer (None: the
-    VLM's default). Raises VLMError when the VLM cannot be built, fails or answers no text.
+    VLM's default, else a whole number >= 1). Raises VLMError when the VLM cannot be built,
+    fails or answers no text; TypeError / ValueError for a ``seg`` that is not a
+    :class:`Segmentation`, an empty question or a bad ``max_new_tokens``.
     """
+    check_segmentation(seg)
+    _check_question(question)
+    if max_new_tokens is not None and whole_number("max_new_tokens", max_new_tokens) < 1:
+        raise ValueError(f"max_new_tokens must be >= 1 or None, got {max_new_tokens!r}")
     if vlm is None or isinstance(vlm, str):
         vlm = make_vlm(vlm or "stub", stub_text=stub_answer(seg.label_maps))
     elif not callable(getattr(vlm, "generate", None)):
@@ -211,10 +223,10 @@ class _Failing:
 
 def cited_records(seg: Segmentation, ids: list[int]) -> list[dict[str, Any]]:
     """``{"id", "mark", "area", "box"}`` of each cited id on the last frame (no box if absent)."""
-    labels = seg.label_maps[-1]
+    labels = check_segmentation(seg).label_maps[-1]
     registry = seg.registry
     out = []
-    for i in ids:
+    for i in whole_ids(ids, "ids", "MotionBit ids"):
         obj = instance_from_mask(labels == i, i)
         rec: dict[str, Any] = {"id": int(i), "mark": registry.number(i), "area": obj.area}
         if obj.area:

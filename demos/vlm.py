@@ -39,6 +39,10 @@ def stub_answer(label_maps: Sequence[np.ndarray]) -> str:
     ``label_maps``: the (H, W) integer label maps of the video, in order (mark numbers
     are given in order of first appearance, as GroundedVQA does).
     """
+    if isinstance(label_maps, (str, bytes, np.ndarray)) or not isinstance(label_maps, Sequence) or not label_maps:
+        # else IndexError (an empty list) or "'NoneType' object is not subscriptable"
+        raise ValueError(f"label_maps must be a non-empty list of (H, W) label maps, got "
+                         f"{type(label_maps).__name__} {label_maps!r:.40}")
     last = np.asarray(label_maps[-1])
     ids, counts = np.unique(last[last > 0], return_counts=True)
     if len(ids) == 0:

@@ -46,7 +46,10 @@ def distance_to_edge(mask: np.ndarray) -> np.ndarray:
     Returns:
         (H, W) float32; 0 outside the mask, >= 1 inside.
     """
-    m = np.pad(np.asarray(mask, dtype=np.uint8) > 0, 1).astype(np.uint8)
+    mask = np.asarray(mask)
+    if mask.ndim != 2:  # else OpenCV's "src.type() == CV_8UC1" (3-D) or an empty result (1-D)
+        raise ValueError(f"mask must be (H, W), got shape {mask.shape}")
+    m = np.pad(mask.astype(np.uint8) > 0, 1).astype(np.uint8)
     dt = cv2.distanceTransform(m, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     return dt[1:-1, 1:-1]
 

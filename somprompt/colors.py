@@ -43,8 +43,24 @@ def _to_color(value: "str | Sequence[int]") -> Color:
 
 
 def to_hex(color: Color) -> str:
-    """``(230, 25, 75)`` -> ``'#e6194b'``."""
-    return "#{:02x}{:02x}{:02x}".format(*color)
+    """``(230, 25, 75)`` -> ``'#e6194b'`` (three whole numbers in [0, 255])."""
+    c = _rgb(color)  # else (300, 0, 0) gave '#12c0000' and (-1, 0, 0) '#-10000'
+    if not all(float(v).is_integer() for v in c):
+        raise ValueError(f"colour {color!r:.40} must be three whole numbers in [0, 255] (RGB)")
+    return "#{:02x}{:02x}{:02x}".format(*(int(v) for v in c))
+
+
+def _rgb(color: object) -> np.ndarray:
+    """``color`` as three finite floats in [0, 255] (an RGB triple; the mean of pixels may
+    be fractional); ValueError otherwise (None gave an IndexError, (300, 0, 0) a
+    luminance above 1)."""
+    try:
+        c = np.asarray(color, dtype=np.float64)
+    except (TypeError, ValueError):
+        c = np.empty(0)
+    if isinstance(color, (str, bool)) or c.shape != (3,) or not np.all(np.isfinite(c)) or c.min() < 0 or c.max() > 255:
+        raise ValueError(f"colour {color!r:.40} must be three numbers in [0, 255] (RGB)")
+    return c
 
 
 @dataclass(frozen=True)
@@ -99,7 +115,7 @@ class ColorPalette:
 
 def relative_luminance(color: Color) -> float:
     """WCAG 2 relative luminance of an sRGB colour, in [0, 1]."""
-    c = np.asarray(color, dtype=np.float64) / 255.0
+    c = _rgb(color) / 255.0
     lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
     return float(0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2])
 

@@ -9,6 +9,7 @@ from typing import Any, Mapping, Protocol, Sequence, runtime_checkable
 import numpy as np
 from PIL import Image
 
+from motionbits.frames import whole_number
 from motionbits.objects import Instance, instances_from_labels
 
 from .answers import ParsedAnswer, parse_answer
@@ -154,6 +155,17 @@ class GroundedVQA:
                 f"vlm must have a generate(frames, prompt, system=None, **gen) method, got "
                 f"{type(vlm).__name__}"
             )
+        # checked now, not after segmenting (else num_frames=0 or max_side=0 failed in
+        # sample_for_vlm, generation=5 with "'int' object is not iterable")
+        if renderer is not None and not isinstance(renderer, SetOfMarkRenderer):
+            raise TypeError(f"renderer must be a somprompt.SetOfMarkRenderer or None, got {type(renderer).__name__}")
+        if max_side is not None and whole_number("max_side", max_side) < 1:
+            raise ValueError(f"max_side must be >= 1 or None, got {max_side!r}")
+        if num_frames is not None and whole_number("num_frames", num_frames) < 1:
+            raise ValueError(f"num_frames must be >= 1 or None, got {num_frames!r}")
+        if generation is not None and not isinstance(generation, Mapping):
+            raise TypeError(f"generation must be a dict of keyword arguments for vlm.generate, "
+                            f"got {type(generation).__name__}")
         self.segmenter = segmenter
         self.vlm = vlm
         self.prompt_name = prompt

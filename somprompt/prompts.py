@@ -14,7 +14,7 @@ from pathlib import Path
 from string import Template
 from typing import Iterable
 
-from .registry import MarkRegistry
+from .registry import MarkRegistry, check_registry
 
 __all__ = [
     "PromptError",
@@ -130,7 +130,7 @@ def load_prompt(name: str, /, *, prompts_dir: "str | os.PathLike | None" = None,
 
 def format_mark_list(registry: MarkRegistry, ids: Iterable[int] | None = None) -> str:
     """``"[1], [2], [5]"``: the marks of ``ids`` (default: all registered), by number."""
-    _check_registry(registry)
+    check_registry(registry)
     ids = registry.ids if ids is None else list(ids)
     texts = [registry.text(i) for i in sorted(ids, key=registry.number)]
     return ", ".join(f"[{t}]" for t in texts)
@@ -140,7 +140,7 @@ def mark_prompt_variables(registry: MarkRegistry, ids: Iterable[int] | None = No
     """``num_marks``, ``mark_list`` and ``cite_example`` for the marks of ``ids``
     (default: all registered). ``cite_example`` shows the first mark, or ``[1]`` /
     ``[a]`` when there are none."""
-    _check_registry(registry)
+    check_registry(registry)
     ids = registry.ids if ids is None else list(ids)
     ordered = sorted(ids, key=registry.number)
     first = registry.text(ordered[0]) if ordered else ("1" if registry.style == "number" else "a")
@@ -149,11 +149,3 @@ def mark_prompt_variables(registry: MarkRegistry, ids: Iterable[int] | None = No
         "mark_list": format_mark_list(registry, ordered) if ordered else "(none)",
         "cite_example": f"[{first}]",
     }
-
-
-def _check_registry(registry: object) -> None:
-    """TypeError unless ``registry`` is a MarkRegistry (a list of ids failed with
-    "'list' object has no attribute 'ids'")."""
-    if not isinstance(registry, MarkRegistry):
-        raise TypeError(f"registry must be a somprompt.MarkRegistry (register the ids with "
-                        f"MarkRegistry().register(ids)), got {type(registry).__name__}")

@@ -93,6 +93,14 @@ def whole_ids(values: Iterable, name: str, what: str = "object ids") -> list[int
     return ids
 
 
+def check_registry(registry: object, name: str = "registry") -> None:
+    """TypeError unless ``registry`` is a :class:`MarkRegistry` (a list of ids failed with
+    "'list' object has no attribute 'ids'", an int with "... no attribute 'register'")."""
+    if not isinstance(registry, MarkRegistry):
+        raise TypeError(f"{name} must be a somprompt.MarkRegistry (register the ids with "
+                        f"MarkRegistry().register(ids)), got {type(registry).__name__}")
+
+
 class MarkRegistry:
     """Remembers which mark number each object id got, so that one object keeps its number
     (and therefore its colour) on every frame of a video.

@@ -12,7 +12,7 @@ from .anchors import LabelPlacement
 from .annotators import BoxAnnotator, ContourAnnotator, MaskAnnotator, NumberAnnotator
 from .colors import ColorPalette
 from .inputs import ImageLike, as_rgb_array, like_input
-from .registry import MarkRegistry, MarkStyle
+from .registry import MarkRegistry, MarkStyle, check_registry
 from .regions import LabelRegions, as_regions
 
 __all__ = ["MARK_PARTS", "MAX_MARKS", "parse_mode", "RenderedMarks", "SetOfMarkRenderer",
@@ -150,6 +150,8 @@ class SetOfMarkRenderer:
         Returns:
             :class:`RenderedMarks`.
         """
+        if registry is not None:
+            check_registry(registry)
         img = as_rgb_array(scene)
         regions = as_regions(labels, img.shape[:2])
         dropped: list[int] = []

@@ -18,7 +18,7 @@ from motionbits.frames import sample_frame_indices, whole_number
 from .anchors import LabelPlacement
 from .inputs import ImageLike, as_rgb_array, check_label_map, like_input
 from .metadata import MarkInfo, describe_marks, marks_to_json
-from .registry import MarkRegistry, MarkStyle, whole_ids
+from .registry import MarkRegistry, MarkStyle, check_registry, whole_ids
 from .render import SetOfMarkRenderer
 
 __all__ = [
@@ -76,7 +76,7 @@ def frames_for_vlm(
     Use it on frames already marked; to keep the numbers legible at the VLM's size,
     prefer :func:`sample_for_vlm` before rendering (what :class:`GroundedVQA` does).
     """
-    frames = list(frames)
+    frames = _as_list(frames, "frames", "frames")
     return [resize_max_side(frames[i], max_side) for i in sample_frame_indices(len(frames), num_frames)]
 
 
@@ -94,7 +94,7 @@ def sample_for_vlm(
         ``(frames, label_maps, indices)``: (h, w, 3) uint8 arrays, (h, w) label maps,
         and the indices of the chosen frames in the input.
     """
-    frames, label_maps = list(frames), list(label_maps)
+    frames, label_maps = _as_list(frames, "frames", "frames"), _as_list(label_maps, "label_maps", "(H, W) label maps")
     _check_lengths(frames, label_maps)
     idx = sample_frame_indices(len(frames), num_frames)
     out_f, out_l = [], []
@@ -104,6 +104,14 @@ def sample_for_vlm(
         out_f.append(resize_max_side(f, max_side))
         out_l.append(resize_max_side(lm, max_side))
     return out_f, out_l, idx
+
+
+def _as_list(values: object, name: str, what: str) -> list:
+    """``values`` as a list; TypeError naming ``name`` for None, a str or a single array
+    (else "'NoneType' object is not iterable")."""
+    if values is None or isinstance(values, (str, bytes, Image.Image)) or not hasattr(values, "__iter__"):
+        raise TypeError(f"{name} must be a list of {what}, got {type(values).__name__}")
+    return list(values)
 
 
 def _check_lengths(frames: Sequence, label_maps: Sequence) -> None:
@@ -186,12 +194,16 @@ def mark_video(
     Returns:
         :class:`MarkedVideo`.
     """
-    frames, label_maps = list(frames), list(label_maps)
+    frames, label_maps = _as_list(frames, "frames", "frames"), _as_list(label_maps, "label_maps", "(H, W) label maps")
     _check_lengths(frames, label_maps)
     if frame_indices is None:
         frame_indices = list(range(len(frames)))
     else:
         frame_indices = _check_frame_indices(frame_indices, len(frames))
+    if renderer is not None and not isinstance(renderer, SetOfMarkRenderer):  # else "no attribute 'render'"
+        raise TypeError(f"renderer must be a somprompt.SetOfMarkRenderer or None, got {type(renderer).__name__}")
+    if registry is not None:
+        check_registry(registry)  # else "'int' object has no attribute 'update'"
     renderer = renderer if renderer is not None else SetOfMarkRenderer()
     registry = registry if registry is not None else MarkRegistry(style)
     checked = []

@@ -566,6 +566,66 @@ _LAB[2:8, 2:8] = 3
 _LAB[10:18, 10:18] = 5
 
 
+def _seg():
+    """A demos Segmentation of two frames (no segmenter run): ids 3 and 5 in the last."""
+    from demos.segmentation import Segmentation
+
+    return Segmentation("clip.mp4", [0, 1], [np.zeros((20, 20, 3), np.uint8)] * 2, [_LAB, _LAB])
+
+
+def _zip(tmp, maps, indices):
+    from demos.media import write_labels_zip
+
+    return write_labels_zip(maps, indices, tmp / "labels.zip")
+
+
+_M2 = np.zeros((2, 6, 6), bool)  # two overlapping instance masks
+_M2[0, :3], _M2[1, 2:] = True, True
+
+
+def _masks_to_labels(*a, **kw):
+    from vlm_adapters.grounding import masks_to_label_map
+
+    return masks_to_label_map(_M2, *a, **kw)
+
+
+def _yoloe(**kw):
+    """A YOLOEDetector around a placeholder model (no ultralytics, no torch)."""
+    from vlm_adapters.grounding import YOLOEDetector
+
+    return YOLOEDetector(object(), device="cpu", **kw)
+
+
+def _vlm_yoloe(**kw):
+    """vlm-yoloe with string options whose files do not exist (the option checks come first)."""
+    from vlm_adapters.plugin import vlm_yoloe_method
+
+    return vlm_yoloe_method(**{"vlm": "stub:- a cup: moved", "yoloe": "/nonexistent/yoloe-11l-seg.pt",
+                               "text_encoder": "/nonexistent/mobileclip_blt.ts", **kw})
+
+
+class _NoDetector:
+    def detect(self, image, phrases):
+        from vlm_adapters.grounding import Detections
+
+        return Detections.empty(*np.shape(image)[:2])
+
+
+def _method(**kw):
+    from vlm_adapters import StubVLM, TextGrounder, VLMYOLOEMethod
+
+    return VLMYOLOEMethod(kw.pop("vlm", StubVLM("- a cup: moved")), TextGrounder(_NoDetector()), **kw)
+
+
+def _fake_transformers(**kw):
+    """A TransformersVLM over a processor that would take anything (no torch)."""
+    from types import SimpleNamespace
+
+    from vlm_adapters.hf import TransformersVLM
+
+    return TransformersVLM(object(), SimpleNamespace(chat_template="{{ messages }}"), frames_as="images", **kw)
+
+
 # --------------------------------------------------------------------------- the table
 
 S = "segment"
@@ -1140,6 +1200,133 @@ CASES: list[Case] = [
         None, "what moved?")), CLEAR, "videos must be a list of videos"),  # was: "object of type 'NoneType' has no len()"
     Case("vlm/generate-batch-prompts-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate_batch(
         [_F], None)), CLEAR, "prompts must be a str or a list"),  # was: "'NoneType' object is not iterable"
+    Case("vlm/stub-prompt-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate(_F, None)), CLEAR,
+         "prompt must be a str"),  # was: recorded and answered (the real adapters refuse it)
+    Case("vlm/stub-max-new-tokens-0", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate(
+        _F, "q", max_new_tokens=0)), CLEAR, "max_new_tokens must be >= 1"),  # was: answered
+    Case("vlm/transformers-prompt-none", api(lambda t: _fake_transformers().generate(_F, None)), CLEAR,
+         "prompt must be a str"),  # was: "prompts must be a str or a list of str" (a parameter not passed)
+    Case("vlm/transformers-max-new-tokens-0", api(lambda t: _fake_transformers().generate(_F, "q", max_new_tokens=0)),
+         CLEAR, "max_new_tokens must be >= 1"),  # was: handed to model.generate
+    Case("vlm/transformers-fps-nan", api(lambda t: _fake_transformers(fps=float("nan"))), CLEAR,
+         "fps must be"),  # was: NaN sent as the video's frame rate
+    Case("vlm/internvideo-image-size-0", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
+        None, None, image_size=0)), CLEAR, "image_size must be >= 1"),  # was: failed in PIL's resize on the first frame
+    Case("vlm/internvideo-image-size-fraction", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
+        None, None, image_size=447.5)), CLEAR, "image_size must be a whole number"),  # was: 447 px
+    Case("vlm/internvideo-prompt-none", api(lambda t: __import__("vlm_adapters").InternVideo25Adapter(
+        None, None).generate(_F, None)), CLEAR, "prompt must be a str"),  # was: "No module named 'torch'" / None sent
+    Case("somprompt/to-hex-out-of-range", api(lambda t: __import__("somprompt").to_hex((300, 0, 0))), CLEAR,
+         "must be three numbers in [0, 255]"),  # was: '#12c0000' ((-1, 0, 0): '#-10000')
+    Case("somprompt/to-hex-fraction", api(lambda t: __import__("somprompt").to_hex((1.5, 0, 0))), CLEAR,
+         "whole numbers"),  # was: "Unknown format code 'x' for object of type 'float'"
+    Case("somprompt/contrast-ratio-none", api(lambda t: __import__("somprompt").contrast_ratio(None, (0, 0, 0))),
+         CLEAR, "must be three numbers"),  # was: IndexError "too many indices for array"
+    Case("somprompt/luminance-out-of-range", api(lambda t: __import__("somprompt").relative_luminance((300, 0, 0))),
+         CLEAR, "must be three numbers in [0, 255]"),  # was: 0.31 (documented in [0, 1], for a colour that is none)
+    Case("somprompt/distance-to-edge-3d", api(lambda t: __import__("somprompt").distance_to_edge(np.ones((4, 4, 3)))),
+         CLEAR, "mask must be (H, W)"),  # was: OpenCV "src.type() == CV_8UC1" (1-D: an empty array)
+    Case("somprompt/draw-registry-int", api(lambda t: __import__("somprompt").draw_marks(
+        np.zeros((20, 20, 3), np.uint8), _LAB, registry=5)), CLEAR,
+         "registry must be a somprompt.MarkRegistry"),  # was: "'int' object has no attribute 'register'"
+    Case("somprompt/mark-video-renderer-int", api(lambda t: __import__("somprompt").mark_video(
+        [np.zeros((20, 20, 3), np.uint8)], [_LAB], renderer=5)), CLEAR,
+         "renderer must be a somprompt.SetOfMarkRenderer"),  # was: "'int' object has no attribute 'render'"
+    Case("somprompt/mark-video-frames-none", api(lambda t: __import__("somprompt").mark_video(None, [_LAB])), CLEAR,
+         "frames must be a list"),  # was: "'NoneType' object is not iterable"
+    Case("somprompt/frames-for-vlm-none", api(lambda t: __import__("somprompt").frames_for_vlm(None)), CLEAR,
+         "frames must be a list"),  # was: "'NoneType' object is not iterable"
+    Case("somprompt/vqa-num-frames-0", api(lambda t: __import__("somprompt").GroundedVQA(
+        lambda f: [_LAB], __import__("vlm_adapters").StubVLM("ok"), num_frames=0)), CLEAR,
+         "num_frames must be >= 1"),  # was: refused by sample_for_vlm after segmenting
+    Case("somprompt/vqa-max-side-0", api(lambda t: __import__("somprompt").GroundedVQA(
+        lambda f: [_LAB], __import__("vlm_adapters").StubVLM("ok"), max_side=0)), CLEAR,
+         "max_side must be >= 1"),  # was: refused after segmenting
+    Case("somprompt/vqa-generation-int", api(lambda t: __import__("somprompt").GroundedVQA(
+        lambda f: [_LAB], __import__("vlm_adapters").StubVLM("ok"), generation=5)), CLEAR,
+         "generation must be a dict"),  # was: "'int' object is not iterable"
+    # ---- the YOLOE path (answer -> phrases -> masks)
+    Case("vlm/masks-to-labels-min-area-nan", api(lambda t: _masks_to_labels(min_area=float("nan"))), CLEAR,
+         "min_area must be a whole number"),  # was: every instance kept (NaN compares false)
+    Case("vlm/masks-to-labels-max-instances-negative", api(lambda t: _masks_to_labels(max_instances=-1)), CLEAR,
+         "max_instances must be >= 1"),  # was: an empty label map
+    Case("vlm/masks-to-labels-scores-nan", api(lambda t: _masks_to_labels(np.array([np.nan, 0.5]))), CLEAR,
+         "scores must be finite"),  # was: the NaN mask painted last, whatever its score
+    Case("vlm/yoloe-conf-nan", api(lambda t: _yoloe(conf=float("nan"))), CLEAR,
+         "conf must be a number in [0, 1]"),  # was: accepted, passed to predict on the first image
+    Case("vlm/yoloe-max-det-fraction", api(lambda t: _yoloe(max_det=2.5)), CLEAR,
+         "max_det must be a whole number"),  # was: accepted
+    Case("vlm/yoloe-text-encoder-int", api(lambda t: _yoloe(text_encoder=5)), CLEAR,
+         "text_encoder must be a file path"),  # was: "text encoder file '5' does not exist"
+    Case("vlm/grounder-detector-none", api(lambda t: __import__("vlm_adapters").TextGrounder(None)), CLEAR,
+         "detector must have detect"),  # was: AttributeError on the first answer
+    Case("vlm/grounder-min-area-negative", api(lambda t: __import__("vlm_adapters").TextGrounder(
+        _NoDetector(), min_area=-1)), CLEAR, "min_area must be >= 0"),  # was: accepted
+    Case("vlm/method-vlm-none", api(lambda t: _method(vlm=None)), CLEAR,
+         "vlm must have generate"),  # was: AttributeError on the first clip
+    Case("vlm/method-prompt-none", api(lambda t: _method(prompt=None)), CLEAR,
+         "prompt must be a non-empty str"),  # was: the stub was asked None
+    Case("vlm/method-num-frames-0", api(lambda t: _method(num_frames=0)), CLEAR,
+         "num_frames must be >= 1"),  # was: refused only on the first clip of the benchmark
+    Case("vlm/method-generate-kwargs-int", api(lambda t: _method(generate_kwargs=5)), CLEAR,
+         "generate_kwargs must be a dict"),  # was: "'int' object is not a mapping"
+    Case("vlm/vlm-yoloe-conf-nan", api(lambda t: _vlm_yoloe(conf="nan")), CLEAR,
+         "option 'conf' must be a number in [0, 1]"),  # was: accepted ('yoloe' file not found hid it)
+    Case("vlm/vlm-yoloe-imgsz-0", api(lambda t: _vlm_yoloe(imgsz="0")), CLEAR, "option 'imgsz' must be >= 1"),
+    Case("vlm/vlm-yoloe-max-new-tokens-0", api(lambda t: _vlm_yoloe(max_new_tokens="0")), CLEAR,
+         "option 'max_new_tokens' must be >= 1"),  # was: accepted, sent to the VLM
+    Case("vlm/vlm-yoloe-fps-negative", api(lambda t: _vlm_yoloe(fps="-1")), CLEAR, "option 'fps' must be a number > 0"),
+    Case("vlm/vlm-yoloe-num-frames-bool", api(lambda t: _vlm_yoloe(num_frames=True)), CLEAR,
+         "option 'num_frames' must be an integer"),  # was: True read as 1 frame
+    Case("vlm/vlm-yoloe-yoloe-int", api(lambda t: _vlm_yoloe(yoloe=5)), CLEAR,
+         "option 'yoloe' must be a file path"),  # was: "expected str, bytes or os.PathLike object, not int"
+    # ---- demos (agent tool, web app, files)
+    Case("demos/labels-zip-negative-ids", api(lambda t: _zip(t, [_LAB - 5], [0])), CLEAR,
+         "negative ids"),  # was: ids -5.. wrapped to 65531.. in the 16-bit PNG
+    Case("demos/labels-zip-ids-over-65535", api(lambda t: _zip(t, [_LAB * 100_000], [0])), CLEAR,
+         "at most 65535"),  # was: 300000 wrapped to 37856
+    Case("demos/labels-zip-more-maps-than-indices", api(lambda t: _zip(t, [_LAB, _LAB], [0])), CLEAR,
+         "one index per map"),  # was: the second map dropped
+    Case("demos/labels-zip-fractional-index", api(lambda t: _zip(t, [_LAB], [2.7])), CLEAR,
+         "whole numbers"),  # was: written as 00002.png
+    Case("demos/demo-clip-fractional-frames", api(lambda t: __import__("demos.media").media.write_demo_clip(
+        t / "c.mp4", n_frames=2.5)), CLEAR, "n_frames must be a whole number"),
+    # was: "'float' object cannot be interpreted as an integer"
+    Case("demos/demo-clip-size-0", api(lambda t: __import__("demos.media").media.write_demo_clip(
+        t / "c.mp4", n_frames=2, size=(0, 0))), CLEAR, "size must be"),  # was: OpenCV "inv_scale_x > 0"
+    Case("demos/stub-answer-empty", api(lambda t: __import__("demos.vlm").vlm.stub_answer([])), CLEAR,
+         "label_maps must be a non-empty list"),  # was: IndexError
+    Case("demos/answer-max-new-tokens-fraction", api(lambda t: __import__("demos.tool").tool.answer_question(
+        _seg(), "what moved?", max_new_tokens=2.5)), CLEAR, "max_new_tokens must be a whole number"),  # was: 2
+    Case("demos/answer-max-new-tokens-0", api(lambda t: __import__("demos.tool").tool.answer_question(
+        _seg(), "what moved?", max_new_tokens=0)), CLEAR, "max_new_tokens must be >= 1"),  # was: sent to the VLM
+    Case("demos/answer-question-empty", api(lambda t: __import__("demos.tool").tool.answer_question(_seg(), "")),
+         CLEAR, "question must be a non-empty string"),  # was: answered ('' and 5 were asked)
+    Case("demos/answer-seg-none", api(lambda t: __import__("demos.tool").tool.answer_question(None, "what moved?")),
+         CLEAR, "seg must be a Segmentation"),  # was: AttributeError "'NoneType' ... no attribute 'label_maps'"
+    Case("demos/describe-seg-none", api(lambda t: __import__("demos.tool").tool.describe_motionbits(None)),
+         CLEAR, "seg must be a Segmentation"),  # was: AttributeError
+    Case("demos/highlight-dim-nan", api(lambda t: __import__("demos.app").app.highlight(_seg(), [3], dim=float("nan"))),
+         CLEAR, "dim must be a number in [0, 1]"),  # was: a black frame (2: uint8 wrapped)
+    Case("demos/highlight-ids-fraction", api(lambda t: __import__("demos.app").app.highlight(_seg(), [3.5])),
+         CLEAR, "whole numbers"),  # was: id 3 highlighted
+    Case("demos/segment-window-config-dict", api(lambda t: __import__("demos.segmentation").segmentation.segment_window(
+        t, config={"max_side": 100})), CLEAR, "config must be a MotionBitsConfig"),  # was: AttributeError 'with_'
+    Case("demos/segment-window-progress-int", api(lambda t: __import__("demos.segmentation").segmentation.segment_window(
+        t.parent / "assets" / "frames", progress=5)), CLEAR,
+         "progress must be callable"),  # was: "'int' object is not callable" after the first frame
+    Case("demos/limits-max-mb-nan", api(lambda t: __import__("demos.app").app.DemoLimits(max_mb=float("nan"))),
+         CLEAR, "max_mb must be"),  # was: accepted, every upload passed the size check
+    Case("demos/config-nodes-negative", api(lambda t: __import__("demos.app").app.DemoConfig(n_nodes=-5)),
+         CLEAR, "n_nodes must be >= 16"),  # was: accepted (the page's slider default)
+    Case("demos/config-max-new-tokens-0", api(lambda t: __import__("demos.app").app.DemoConfig(max_new_tokens=0)),
+         CLEAR, "max_new_tokens must be >= 1"),  # was: accepted, sent with every question
+    Case("demos/check-video-not-a-path", api(lambda t: __import__("demos.app").app.check_video(
+        ["clip.mp4"], __import__("demos.app").app.DemoLimits())), CLEAR,
+         "video must be the path"),  # was: "expected str, bytes or os.PathLike object, not list"
+    Case("demos/app-step-bool", api(lambda t: __import__("demos.app").app._Handlers(
+        __import__("demos.app").app.DemoConfig(), t).run(str(t.parent / "assets" / "clip.mp4"), 400, 0, 0, True)[-1]),
+         CORRECT, check=lambda o, t: "Step must be a whole number" in o.value),  # was: True ran as step 1
 ]
 # --------------------------------------------------------------------------- tests
 

@@ -17,6 +17,8 @@ torch and ultralytics are imported only when a YOLOE model is built.
 """
 from __future__ import annotations
 
+import math
+import numbers
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -24,7 +26,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from motionbits.frames import as_rgb_array
+from motionbits.frames import as_rgb_array, whole_number
 from motionbits.objects import Instance, instance_from_mask
 
 from .base import Frame, MissingDependencyError, require
@@ -80,6 +82,20 @@ class Detections:
         ]
 
 
+def _check_counts(min_area: Any, max_instances: Any) -> None:
+    """``min_area`` a whole number >= 0, ``max_instances`` one >= 1 or None (else 2.5 read as 2,
+    NaN kept every instance, -1 gave an empty map)."""
+    if whole_number("min_area", min_area) < 0:
+        raise ValueError(f"min_area must be >= 0 pixels, got {min_area!r}")
+    if max_instances is not None and whole_number("max_instances", max_instances) < 1:
+        raise ValueError(f"max_instances must be >= 1 or None, got {max_instances!r}")
+
+
+def _check_fraction(name: str, value: Any) -> None:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (math.isfinite(value) and 0 <= value <= 1):
+        raise ValueError(f"{name} must be a number in [0, 1], got {value!r:.40}")
+
+
 @runtime_checkable
 class PhraseDetector(Protocol):
     """Anything that finds instances of text phrases in an image."""
@@ -117,6 +133,9 @@ def masks_to_label_map(
     k, h, w = masks.shape
     if scores is not None and np.shape(scores) != (k,):
         raise ValueError(f"{k} masks but scores of shape {np.shape(scores)}; give one score per mask")
+    if scores is not None and not np.all(np.isfinite(np.asarray(scores, dtype=np.float64))):  # NaN: arbitrary order
+        raise ValueError(f"scores must be finite, got {np.asarray(scores)[:8]}")
+    _check_counts(min_area, max_instances)
     labels = np.zeros((h, w), np.int32)
     order = np.arange(k) if scores is None else np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
     next_label = 1
@@ -166,16 +185,24 @@ class YOLOEDetector:
         max_det: int = 100,
         device: str | None = None,
     ) -> None:
+        _check_fraction("conf", conf)  # else NaN, 5 or -1 reached ultralytics' predict on the first image
+        _check_fraction("iou", iou)
+        if whole_number("imgsz", imgsz) < 1:
+            raise ValueError(f"imgsz must be >= 1 pixel, got {imgsz!r}")
+        if whole_number("max_det", max_det) < 1:
+            raise ValueError(f"max_det must be >= 1, got {max_det!r}")
         self.model = model
-        self.conf = conf
-        self.iou = iou
-        self.imgsz = imgsz
-        self.max_det = max_det
+        self.conf = float(conf)
+        self.iou = float(iou)
+        self.imgsz = int(imgsz)
+        self.max_det = int(max_det)
         self.device = device or _default_device()
         self._text_encoder_spec = text_encoder
         self._encode: Callable[[list[str]], Any] | None = None
         self._embeddings: dict[str, Any] = {}  # phrase -> (D,) prompt embedding (after YOLOE's text head)
         self._active: list[str] | None = None  # classes currently set on the model
+        if text_encoder is not None and not callable(text_encoder) and not isinstance(text_encoder, (str, os.PathLike)):
+            raise TypeError(f"text_encoder must be a file path, a callable or None, got {type(text_encoder).__name__}")
         if text_encoder is not None and not callable(text_encoder) and not os.path.isfile(text_encoder):
             raise FileNotFoundError(
                 f"text encoder file '{text_encoder}' does not exist. YOLOE's text prompts need the "
@@ -340,6 +367,11 @@ class TextGrounder:
         min_area: int = 1,
         max_instances: int | None = None,
     ) -> None:
+        if not callable(getattr(detector, "detect", None)):  # else AttributeError on the first answer
+            raise TypeError(f"detector must have detect(image, phrases) -> Detections, got {type(detector).__name__}")
+        if not callable(parse):
+            raise TypeError(f"parse must be callable as parse(text) -> list of phrases, got {type(parse).__name__}")
+        _check_counts(min_area, max_instances)
         self.detector = detector
         self.parse = parse
         self.min_area = min_area

@@ -13,6 +13,8 @@ imported when a model is loaded, never at import time.
 """
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
@@ -22,6 +24,7 @@ from .base import (
     Frame,
     MissingDependencyError,
     _broadcast_prompts,
+    check_generate_args,
     check_local_path,
     require,
     require_attr,
@@ -78,6 +81,9 @@ class TransformersVLM(BaseVLM):
         frames_as = frames_as or self.default_frames_as
         if frames_as not in _FRAMES_AS:
             raise ValueError(f"frames_as must be one of {_FRAMES_AS}, got {frames_as!r}")
+        if fps is not None and (isinstance(fps, bool) or not isinstance(fps, numbers.Real)
+                                or not (math.isfinite(fps) and fps > 0)):  # else sent as video metadata
+            raise ValueError(f"fps must be None or a finite number > 0, got {fps!r:.40}")
         if getattr(processor, "chat_template", None) is None:
             raise ValueError(
                 "the processor has no chat template; load the processor of an instruction-tuned "
@@ -277,6 +283,8 @@ class TransformersVLM(BaseVLM):
         ``do_sample=False`` is greedy decoding (deterministic); extra keyword arguments go to
         ``model.generate``.
         """
+        check_generate_args(prompt, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature,
+                            seed=seed)
         inputs = self.prepare_inputs(frames, prompt, system)
         return self._generate(
             inputs,
@@ -306,6 +314,9 @@ class TransformersVLM(BaseVLM):
         distinct length; answers come back in the order of `videos`.
         """
         prompts = _broadcast_prompts(prompts, videos)
+        for p in prompts:
+            check_generate_args(p, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature,
+                                seed=seed)
         clips = [to_pil_frames(v) for v in videos]
         if self.frames_as == "video" and self.stacks_video_frames:
             groups: dict[int, list[int]] = {}

@@ -18,10 +18,13 @@ from typing import Any
 
 import numpy as np
 
+from motionbits.frames import whole_number
+
 from .base import (
     DEFAULT_MAX_NEW_TOKENS,
     BaseVLM,
     Frame,
+    check_generate_args,
     check_local_path,
     require,
     resolve_device,
@@ -76,6 +79,8 @@ class InternVideo25Adapter(BaseVLM):
     def __init__(self, model: Any, tokenizer: Any, *, image_size: int = 448, name: str | None = None) -> None:
         self.model = model
         self.tokenizer = tokenizer
+        if whole_number("image_size", image_size) < 1:  # else 2.5 read as 2, 0 failed in PIL's resize
+            raise ValueError(f"image_size must be >= 1 pixel, got {image_size!r}")
         self.image_size = int(image_size)
         self.name = name or self.default_name
 
@@ -153,6 +158,8 @@ class InternVideo25Adapter(BaseVLM):
         seed: int | None = None,
     ) -> str:
         """Answer `prompt` about `frames` through the checkpoint's own ``chat`` method."""
+        check_generate_args(prompt, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature,
+                            seed=seed)
         import torch
 
         if seed is not None:

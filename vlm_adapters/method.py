@@ -7,10 +7,12 @@ into masks on the final frame.
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+
+from motionbits.frames import whole_number
 
 from .base import VLMAdapter, sample_frames, to_rgb_frames
 from .grounding import TextGrounder
@@ -46,6 +48,17 @@ class VLMYOLOEMethod:
         generate_kwargs: dict[str, Any] | None = None,
         name: str | None = None,
     ) -> None:
+        if not callable(getattr(vlm, "generate", None)):  # else AttributeError on the first clip
+            raise TypeError(f"vlm must have generate(frames, prompt, system=None, **gen), got {type(vlm).__name__}")
+        if not (callable(getattr(grounder, "phrases", None)) and callable(getattr(grounder, "ground", None))):
+            raise TypeError(f"grounder must be a TextGrounder (phrases(text), ground(text, image)), "
+                            f"got {type(grounder).__name__}")
+        if not isinstance(prompt, str) or not prompt.strip():  # else None was asked
+            raise ValueError(f"prompt must be a non-empty str, got {prompt!r:.40}")
+        if num_frames is not None and whole_number("num_frames", num_frames) < 1:  # else refused on the first clip
+            raise ValueError(f"num_frames must be >= 1 or None, got {num_frames!r}")
+        if generate_kwargs is not None and not isinstance(generate_kwargs, Mapping):
+            raise TypeError(f"generate_kwargs must be a dict or None, got {type(generate_kwargs).__name__}")
         self.vlm = vlm
         self.grounder = grounder
         self.prompt = prompt

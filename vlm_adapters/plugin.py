@@ -27,12 +27,15 @@ VLM specs (`load_vlm`), ``KIND:ARGUMENT``:
 from __future__ import annotations
 
 import inspect
+import math
 import os
 import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+
+from motionbits.frames import whole_number
 
 from .base import VLMAdapter, check_local_path, require
 from .method import VLMYOLOEMethod
@@ -142,23 +145,35 @@ def load_embeddings(path: str | os.PathLike) -> tuple[list[str], np.ndarray]:
     return names, emb
 
 
-def _int(key: str, value: Any, *, none_words: Sequence[str] = ()) -> int | None:
+def _int(key: str, value: Any, *, none_words: Sequence[str] = (), minimum: int | None = None) -> int | None:
     if value is None or (isinstance(value, str) and value.strip().lower() in none_words):
         return None
-    try:
-        return int(value)
+    extra = f" or {'/'.join(none_words)}" if none_words else ""
+    try:  # a str as the command line gives it; from Python a whole number (2.5 read as 2, True as 1)
+        number = int(value) if isinstance(value, str) else whole_number(key, value)
     except (TypeError, ValueError):
-        extra = f" or {'/'.join(none_words)}" if none_words else ""
         raise ValueError(f"{_opt(key)} must be an integer{extra}, got {value!r}") from None
+    if minimum is not None and number < minimum:
+        raise ValueError(f"{_opt(key)} must be >= {minimum}{extra}, got {value!r}")
+    return number
 
 
-def _float(key: str, value: Any) -> float | None:
+def _float(key: str, value: Any, *, low: float = -math.inf, high: float = math.inf,
+           positive: bool = False) -> float | None:
+    """A finite number in [low, high] (> 0 with ``positive``): else NaN, 5 or -1 reached the
+    model after it was loaded."""
     if value is None:
         return None
+    what = "a number > 0" if positive else f"a number in [{low:g}, {high:g}]"
     try:
-        return float(value)
+        if isinstance(value, bool):
+            raise TypeError
+        number = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{_opt(key)} must be a number, got {value!r}") from None
+        raise ValueError(f"{_opt(key)} must be {what}, got {value!r}") from None
+    if not (math.isfinite(number) and low <= number <= high) or positive and number <= 0:
+        raise ValueError(f"{_opt(key)} must be {what}, got {value!r}")
+    return number
 
 
 def _bool(key: str, value: Any) -> bool:
@@ -235,6 +250,8 @@ def vlm_yoloe_method(
     if vlm is None or (isinstance(vlm, str) and not vlm.strip()):
         raise ValueError(f"{METHOD_NAME} needs the option 'vlm', a VLM spec ({_SPEC_HELP}); on the command "
                          f"line: --option {METHOD_NAME}.vlm=qwen2.5-vl:/models/Qwen2.5-VL-7B-Instruct")
+    if yoloe is not None and not isinstance(yoloe, (str, os.PathLike)):  # else os.fspath's message
+        raise TypeError(f"{_opt('yoloe')} must be a file path, got {type(yoloe).__name__} {yoloe!r:.40}")
     if yoloe is None or not os.fspath(yoloe).strip():
         raise ValueError(f"{METHOD_NAME} needs the option 'yoloe', a local YOLOE segmentation checkpoint; "
                          f"on the command line: --option {METHOD_NAME}.yoloe=/models/yoloe-11l-seg.pt")
@@ -243,12 +260,11 @@ def vlm_yoloe_method(
                          f"mobileclip_blt.ts) or 'embeddings' (an .npz of precomputed YOLOE prompt embeddings)")
 
     # cheap checks first: nothing heavy is loaded before every option is known to be usable
-    n_frames = _int("num_frames", num_frames, none_words=("all", "none"))
-    if n_frames is not None and n_frames < 1:
-        raise ValueError(f"{_opt('num_frames')} must be >= 1 or 'all', got {num_frames!r}")
-    fps_f = _float("fps", fps)
-    tokens = _int("max_new_tokens", max_new_tokens)
-    conf_f, imgsz_i, max_det_i = _float("conf", conf), _int("imgsz", imgsz), _int("max_det", max_det)
+    n_frames = _int("num_frames", num_frames, none_words=("all", "none"), minimum=1)
+    fps_f = _float("fps", fps, positive=True)
+    tokens = _int("max_new_tokens", max_new_tokens, minimum=1)
+    conf_f = _float("conf", conf, low=0.0, high=1.0)
+    imgsz_i, max_det_i = _int("imgsz", imgsz, minimum=1), _int("max_det", max_det, minimum=1)
     trust = _bool("trust_remote_code", trust_remote_code)
     weights = os.path.expanduser(os.fspath(yoloe))
     if not weights.endswith((".yaml", ".yml")):

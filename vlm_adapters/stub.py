@@ -13,7 +13,7 @@ from typing import Any, Union
 
 import numpy as np
 
-from .base import DEFAULT_MAX_NEW_TOKENS, BaseVLM, Frame, to_rgb_frames
+from .base import DEFAULT_MAX_NEW_TOKENS, BaseVLM, Frame, check_generate_args, to_rgb_frames
 
 __all__ = ["StubVLM", "StubCall"]
 
@@ -84,6 +84,10 @@ class StubVLM(BaseVLM):
         temperature: float = 1.0,
         seed: int | None = None,
     ) -> str:
+        # the checks of the real adapters, so that a pipeline tested with the stub sends them nothing
+        # they refuse (a None prompt or max_new_tokens=0 was recorded and answered)
+        check_generate_args(prompt, max_new_tokens=max_new_tokens, do_sample=do_sample, temperature=temperature,
+                            seed=seed)
         arrays = to_rgb_frames(frames)
         i = len(self.calls)
         gen = {"max_new_tokens": max_new_tokens, "do_sample": do_sample, "temperature": temperature, "seed": seed}
