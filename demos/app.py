@@ -106,7 +106,10 @@ def check_video(path: str | None, limits: DemoLimits) -> tuple[int, tuple[int, i
     Raises:
         ValueError: no file, a missing file, not a video, fewer than 2 frames, or over a limit
             (one line).
+        TypeError: ``limits`` is not a :class:`DemoLimits`.
     """
+    if not isinstance(limits, DemoLimits):  # else "'NoneType' object has no attribute 'max_mb'"
+        raise TypeError(f"limits must be a DemoLimits, got {type(limits).__name__} {limits!r:.40}")
     if not path:
         raise ValueError("no video: upload a video file or pick an example")
     if not isinstance(path, (str, os.PathLike)):  # else os.fspath's "expected str, bytes or os.PathLike"

@@ -21,7 +21,7 @@ from motionbits import MotionBitsConfig
 from .schema import ASK_ABOUT_MOTION, SEGMENT_MOVING_BODIES
 from .segmentation import MAX_NODES
 from .tool import ask_about_motion, segment_moving_bodies
-from .vlm import VLMError, check_vlm_spec, make_vlm, vlm_spec_help
+from .vlm import VLMError, _resolve, check_vlm_spec, make_vlm, vlm_spec_help
 
 __all__ = ["build_server", "main"]
 
@@ -49,13 +49,14 @@ def build_server(vlm: str = "stub") -> Any:
     (``"stub"``: a new stub per question that cites the largest MotionBit).
     """
     check_vlm_spec(vlm)
+    is_stub = _resolve(vlm).lower() == "stub"  # None and "" are the stub (None.strip() failed)
     from mcp.server.mcpserver import MCPServer
     from mcp.server.mcpserver.exceptions import ToolError
 
     state: dict[str, Any] = {}
 
     def the_vlm() -> Any:
-        if vlm.strip().lower() == "stub":
+        if is_stub:
             return None  # ask_about_motion builds the default stub for each video
         if "vlm" not in state:
             state["vlm"] = make_vlm(vlm)

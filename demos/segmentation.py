@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 
 from motionbits import MotionBitsConfig, MotionBitsSegmenter, iter_frames
+from motionbits.frames import whole_number
 from motionbits.segmenter import MIN_WORK_SIDE, min_short_side, work_size
 from motionbits.video import IMAGE_SUFFIXES
 from somprompt import MarkRegistry
@@ -36,7 +37,15 @@ MAX_VIDEO_SIDE = 1920
 
 
 def max_frames_for(height: int, width: int) -> int:
-    """Most frames of ``height`` x ``width`` one window may hold (at least 2)."""
+    """Most frames of ``height`` x ``width`` one window may hold (at least 2).
+
+    Raises:
+        TypeError / ValueError: a side that is not a whole number >= 1 (NaN gave 300).
+    """
+    for name, side in (("height", height), ("width", width)):
+        if whole_number(name, side) < 1:
+            raise ValueError(f"{name} must be >= 1 px, got {side!r}")
+    height, width = int(height), int(width)
     return max(2, min(MAX_WINDOW_FRAMES, MAX_WINDOW_PIXELS // max(1, height * width)))
 
 #: progress(done, total or None)

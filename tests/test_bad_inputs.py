@@ -1038,6 +1038,34 @@ CASES: list[Case] = [
          check=lambda o, t: o.value == [1.0, 1.0]),  # was: MemoryError "Unable to allocate 58.2 TiB"
     Case("eval-api/boundary-tolerance-1d-shape", api(lambda t: __import__("motionbits.eval").eval.boundary_tolerance((480,))),
          CLEAR, "shape must be (H, W, ...)"),  # was: IndexError traceback
+    Case("eval-api/ignore-nan", api(lambda t: __import__("motionbits.eval").eval.evaluate_frame(
+        _LAB, _LAB + 1, np.full(_LAB.shape, np.nan))), CLEAR,
+         "ignore mask holds NaN"),  # was: every pixel ignored (NaN is True), perfect scores
+    Case("eval-api/ari-float", api(lambda t: __import__("motionbits.eval").eval.adjusted_rand_index(
+        _LAB + 0.5, _LAB)), CLEAR, "whole-number labels"),  # was: 1.0 (3.5 and 5.5 read as labels)
+    Case("eval-api/ari-negative", api(lambda t: __import__("motionbits.eval").eval.adjusted_rand_index(
+        -_LAB, _LAB)), CLEAR, "negative labels"),  # was: 1.0 (-1, void, read as a label)
+    Case("synth-api/demo-clip-n-frames-fraction", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
+        n_frames=2.5, size=(40, 50))), CLEAR, "n_frames must be a whole number"),
+    # was: "'float' object cannot be interpreted as an integer"
+    Case("synth-api/demo-clip-size-int", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
+        n_frames=2, size=40)), CLEAR, "size must be (height, width)"),  # was: "'int' object is not subscriptable"
+    Case("synth-api/render-size-0", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
+        [], size=(0, 0), n_frames=2)), CLEAR, "size must be (height, width)"),  # was: OpenCV "inv_scale_x > 0"
+    Case("synth-api/render-seed-negative", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
+        [], size=(20, 20), n_frames=2, seed=-1)), CLEAR, "seed must be >= 0"),  # was: "expected non-negative integer"
+    Case("synth-api/render-noise-nan", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
+        [], size=(20, 20), n_frames=2, noise=float("nan"))), CLEAR, "noise must be finite"),  # was: black frames
+    Case("synth-api/body-omega-nan", api(lambda t: __import__("motionbits.synth").synth.Body(
+        (__import__("motionbits.synth").synth.Polygon.rect(1, 1, 9, 9),), omega=float("nan"))), CLEAR,
+         "omega must be finite"),  # was: the body vanished from every frame, labels all 0
+    Case("synth-api/bodies-are-polygons", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
+        [__import__("motionbits.synth").synth.Polygon.rect(1, 1, 9, 9)], size=(20, 20), n_frames=2)), CLEAR,
+         "bodies must be a list of Body"),  # was: AttributeError "'Polygon' ... 'polygons'"
+    Case("synth-api/polygon-empty", api(lambda t: __import__("motionbits.synth").synth.Polygon(())), CLEAR,
+         "at least 3 (x, y) pairs"),  # was: OpenCV "p.checkVector(2, CV_32S) > 0" when rendered
+    Case("synth-api/polygon-huge-coords", api(lambda t: __import__("motionbits.synth").synth.Polygon.rect(
+        1, 1, 1e12, 1e12)), CLEAR, "within +-1e9 px"),  # was: int32 wrapped when drawn, 15 s
     Case("benchmark-api/max-scenes-0", api(lambda t: __import__("motionbits.eval.benchmark").eval.benchmark.run_benchmark(
         t.parent / "assets" / "data", {"zero": lambda frames: np.zeros(frames[0].shape[:2], int)}, max_scenes=0,
         progress=False)), CLEAR, "max_per_track must be >= 1"),  # was: no scene scored, every score NaN, no error
@@ -1324,6 +1352,11 @@ CASES: list[Case] = [
     Case("demos/check-video-not-a-path", api(lambda t: __import__("demos.app").app.check_video(
         ["clip.mp4"], __import__("demos.app").app.DemoLimits())), CLEAR,
          "video must be the path"),  # was: "expected str, bytes or os.PathLike object, not list"
+    Case("demos/check-video-limits-none", api(lambda t: __import__("demos.app").app.check_video(
+        str(t.parent / "assets" / "clip.mp4"), None)), CLEAR,
+         "limits must be a DemoLimits"),  # was: AttributeError "'NoneType' ... 'max_mb'"
+    Case("demos/max-frames-for-nan", api(lambda t: __import__("demos.segmentation").segmentation.max_frames_for(
+        float("nan"), 640)), CLEAR, "height must be a whole number"),  # was: 300
     Case("demos/app-step-bool", api(lambda t: __import__("demos.app").app._Handlers(
         __import__("demos.app").app.DemoConfig(), t).run(str(t.parent / "assets" / "clip.mp4"), 400, 0, 0, True)[-1]),
          CORRECT, check=lambda o, t: "Step must be a whole number" in o.value),  # was: True ran as step 1

@@ -23,12 +23,25 @@ def adjusted_rand_index(a: np.ndarray, b: np.ndarray) -> float:
     score 1.
 
     Args:
-        a, b: integer label arrays of the same shape (any numbering; 0 is a label like any other).
+        a, b: label arrays of the same shape: non-negative integers (int, bool, or floats
+            holding whole numbers); any numbering, 0 is a label like any other.
 
     Returns:
         ARI in [-1, 1].
+
+    Raises:
+        TypeError: not a numeric array.
+        ValueError: fractional, NaN or negative labels, or the shapes differ.
     """
     a, b = np.asarray(a), np.asarray(b)
+    for name, x in (("a", a), ("b", b)):  # 0.5 and 0.7 were one label, NaN and -1 (void) labels
+        if x.dtype.kind not in "biuf":
+            raise TypeError(f"{name} must be an integer label array, got dtype {x.dtype}")
+        if x.dtype.kind == "f" and not (np.isfinite(x).all() and (x == np.round(x)).all()):
+            raise ValueError(f"{name} must hold whole-number labels, got {x.dtype} values such as "
+                             f"{float(x[~(np.isfinite(x) & (x == np.round(x)))].flat[0])!r}")
+        if x.size and x.dtype != np.bool_ and x.min() < 0:
+            raise ValueError(f"{name} holds negative labels (min {x.min()}); labels must be >= 0")
     if a.shape != b.shape:  # else a (10, 40) and a (20, 20) map were compared pixel by pixel
         raise ValueError(f"label arrays differ in shape: {a.shape} vs {b.shape}; they must "
                          "label the same items")

@@ -79,7 +79,8 @@ def contingency(pred: np.ndarray, gt: np.ndarray, ignore: np.ndarray | None = No
             whose pixels are ignored does not exist for the evaluation.
 
     Raises:
-        ValueError: shapes differ, or a map is malformed (see ``check_label_map``).
+        ValueError: shapes differ, a map is malformed (see ``check_label_map``), or the ignore
+            mask holds NaN.
     """
     pred = check_label_map(pred, name="prediction")
     gt = check_label_map(gt, name="ground truth")
@@ -90,7 +91,11 @@ def contingency(pred: np.ndarray, gt: np.ndarray, ignore: np.ndarray | None = No
         )
     p, g = pred.ravel(), gt.ravel()
     if ignore is not None:
-        ignore = np.asarray(ignore, dtype=bool)
+        ignore = np.asarray(ignore)
+        if ignore.dtype.kind in "fc" and not np.isfinite(ignore).all():  # NaN is True: ignored
+            raise ValueError("ignore mask holds NaN or infinite values; it must be bool (True = "
+                             "pixel left out) or 0/1")
+        ignore = ignore.astype(bool)
         if ignore.shape != gt.shape:
             raise ValueError(f"ignore mask shape {ignore.shape} differs from ground truth {gt.shape}")
         keep = ~ignore.ravel()

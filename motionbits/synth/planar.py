@@ -8,14 +8,39 @@ CLI and the test scenes of the segmenter.
 
 from __future__ import annotations
 
+import math
+import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import cv2
 import numpy as np
 
+from motionbits.frames import whole_number
+
 __all__ = ["Polygon", "Body", "PlanarClip", "render_planar_clip", "demo_clip", "smooth_texture"]
 
 _SUPERSAMPLE = 2  # render at 2x and downsample: anti-aliased edges like a real camera
+
+
+def _finite(name: str, value: Any) -> float:
+    """``value`` as a float if it is a finite real number; else a one-line error naming ``name``
+    (NaN or inf made a body vanish, or the frames noise)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__} {value!r:.40}")
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return float(value)
+
+
+def _check_size(size: Any) -> tuple[int, int]:
+    """``size`` as (H, W), two whole numbers >= 1 (else OpenCV's "inv_scale_x > 0", numpy's
+    "negative dimensions are not allowed", or an IndexError)."""
+    if (isinstance(size, (str, bytes)) or not isinstance(size, Sequence) or len(size) != 2
+            or any(whole_number("size", v) < 1 for v in size)):
+        raise ValueError(f"size must be (height, width), two whole numbers >= 1, got {size!r:.40}")
+    return int(size[0]), int(size[1])
 
 
 @dataclass(frozen=True)
@@ -25,6 +50,16 @@ class Polygon:
     points: tuple[tuple[float, float], ...]
     texture_seed: int = 0
 
+    def __post_init__(self) -> None:
+        pts = np.asarray(self.points, dtype=object)
+        if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 3:  # else OpenCV's fillPoly assertion
+            raise ValueError(f"a Polygon's points must be at least 3 (x, y) pairs, got {self.points!r:.60}")
+        for v in pts.ravel():  # drawn as int32 at 2x: 1e12 wrapped (and took 15 s)
+            if abs(_finite("a Polygon's point coordinate", v)) > 1e9:
+                raise ValueError(f"a Polygon's point coordinate must be within +-1e9 px, got {v!r}")
+        if whole_number("texture_seed", self.texture_seed) < 0:
+            raise ValueError(f"texture_seed must be >= 0, got {self.texture_seed}")
+
     @staticmethod
     def rect(x0: float, y0: float, x1: float, y1: float, texture_seed: int = 0) -> "Polygon":
         return Polygon(((x0, y0), (x1, y0), (x1, y1), (x0, y1)), texture_seed)
@@ -32,6 +67,8 @@ class Polygon:
     @staticmethod
     def regular(cx: float, cy: float, radius: float, sides: int, phase: float = 0.0,
                 texture_seed: int = 0) -> "Polygon":
+        if whole_number("sides", sides) < 3:  # 2.5 drew a triangle
+            raise ValueError(f"sides must be >= 3, got {sides}")
         a = phase + 2 * np.pi * np.arange(sides) / sides
         return Polygon(tuple(zip(cx + radius * np.cos(a), cy + radius * np.sin(a))), texture_seed)
 
@@ -52,6 +89,22 @@ class Body:
     pivot: tuple[float, float] | None = None  # default: centroid of the polygons
     start: int = 0
     stop: int | None = None
+
+    def __post_init__(self) -> None:
+        if (isinstance(self.polygons, (str, bytes)) or not isinstance(self.polygons, Sequence)
+                or not self.polygons or not all(isinstance(p, Polygon) for p in self.polygons)):
+            raise TypeError(f"a Body's polygons must be a non-empty tuple of Polygon, got {self.polygons!r:.60}")
+        _finite("omega", self.omega)
+        for name, pair in (("velocity", self.velocity), ("pivot", self.pivot)):
+            if pair is None and name == "pivot":
+                continue
+            if isinstance(pair, (str, bytes)) or not isinstance(pair, Sequence) or len(pair) != 2:
+                raise ValueError(f"{name} must be an (x, y) pair, got {pair!r:.40}")
+            for v in pair:
+                _finite(name, v)
+        whole_number("start", self.start)  # 1.5 started the motion between frames
+        if self.stop is not None:
+            whole_number("stop", self.stop)
 
     def moves(self, n_frames: int) -> bool:
         active = min(self.stop if self.stop is not None else n_frames, n_frames - 1) - self.start
@@ -136,10 +189,23 @@ def render_planar_clip(bodies: list[Body] | tuple[Body, ...], *, size: tuple[int
 
     Returns:
         A :class:`PlanarClip`.
+
+    Raises:
+        TypeError / ValueError: ``bodies`` is not a sequence of :class:`Body`, ``size`` not
+            two whole numbers >= 1, ``n_frames`` not a whole number >= 1, ``seed`` not a
+            whole number >= 0, or ``noise`` not a finite number >= 0.
     """
-    if n_frames < 1:
+    if whole_number("n_frames", n_frames) < 1:
         raise ValueError(f"n_frames must be >= 1, got {n_frames}")
-    h, w = size
+    n_frames = int(n_frames)
+    h, w = _check_size(size)
+    if whole_number("seed", seed) < 0:  # else numpy's "expected non-negative integer"
+        raise ValueError(f"seed must be >= 0, got {seed}")
+    if _finite("noise", noise) < 0:  # NaN and inf noise gave black / saturated frames
+        raise ValueError(f"noise must be >= 0, got {noise}")
+    if (isinstance(bodies, (str, bytes)) or not isinstance(bodies, Sequence)
+            or not all(isinstance(b, Body) for b in bodies)):  # a Polygon: AttributeError
+        raise TypeError(f"bodies must be a list of Body, got {bodies!r:.60}")
     hs, ws = h * _SUPERSAMPLE, w * _SUPERSAMPLE
     rng = np.random.default_rng(seed)
     background = smooth_texture((h, w), rng, contrast=0.8)
@@ -181,6 +247,7 @@ def demo_clip(n_frames: int = 16, size: tuple[int, int] = (480, 640), seed: int 
     - a static distractor (never moves: background).
     Geometry is given for 480x640 and scaled to ``size``.
     """
+    size = _check_size(size)  # before scaling: an int size failed with "not subscriptable"
     sy, sx = size[0] / 480.0, size[1] / 640.0
 
     def p(x: float, y: float) -> tuple[float, float]:
