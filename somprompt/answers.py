@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import Iterable
+from typing import Iterable, Iterator
 
 import numpy as np
 
@@ -88,6 +88,9 @@ _PATTERNS: dict[str, list[re.Pattern]] = {
         re.compile(rf"\b{_KW}\s+#?([a-z])(?=\s*(?:[,.;:!?)\]]|$)|\s+(?i:and|or)\b)"),
     ],
 }
+# the start of a bracketed list of numbers (pattern 0 of "number" without its closing
+# bracket): it never backtracks, so it finds where a run of items ends in linear time
+_NUMBER_RUN = re.compile(rf"{_OPEN}\s*{_ITEM}(?:{_SEP}{_ITEM})*")
 _TOKEN = {"number": re.compile(r"\d+"), "letter": re.compile(r"[A-Za-z]+")}
 _SEP_WORDS = {"and", "or"}
 _KW_WORDS = re.compile(rf"^{_KW}$")
@@ -173,7 +176,9 @@ def find_citations(answer: str, style: MarkStyle = "number") -> list[tuple[str, 
         raise ValueError(f"unknown mark style {style!r}; use 'number' or 'letter'")
     spans: dict[tuple[int, int], str] = {}
     for pattern in _PATTERNS[style]:
-        for m in pattern.finditer(answer):
+        matches = (_bracket_lists(answer) if pattern is _PATTERNS["number"][0]
+                   else pattern.finditer(answer))
+        for m in matches:
             g_start = m.start(1)
             for tok in _TOKEN[style].finditer(m.group(1)):
                 word = tok.group(0)
@@ -182,6 +187,21 @@ def find_citations(answer: str, style: MarkStyle = "number") -> list[tuple[str, 
                 span = (g_start + tok.start(), g_start + tok.end())
                 spans.setdefault(span, word.lower() if style == "letter" else _number_text(word))
     return [(text, s, e) for (s, e), text in sorted(spans.items())]
+
+
+def _bracket_lists(answer: str) -> Iterator[re.Match]:
+    """The matches of the bracketed-list pattern, as its ``finditer`` gives them, in linear
+    time: ``finditer`` tried the pattern at every ``[`` of a run of list items and each try
+    scanned the rest of the run, so an unclosed ``[3, [3, [3, ...`` (a VLM repeating itself
+    until ``max_new_tokens``) took 47 s for 40,000 characters. A try that fails at a run's
+    start fails at every ``[`` inside the run (each begins an item, whose continuations
+    the first try has already seen), so the search goes on after the run."""
+    pattern, pos = _PATTERNS["number"][0], 0
+    while (run := _NUMBER_RUN.search(answer, pos)) is not None:
+        m = pattern.match(answer, run.start())
+        if m is not None:
+            yield m
+        pos = run.end() if m is None else m.end()
 
 
 def _number_text(word: str) -> str:

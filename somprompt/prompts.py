@@ -14,7 +14,7 @@ from pathlib import Path
 from string import Template
 from typing import Iterable
 
-from .registry import MarkRegistry, check_registry
+from .registry import MarkRegistry, check_registry, whole_ids
 
 __all__ = [
     "PromptError",
@@ -38,6 +38,13 @@ def default_prompts_dir() -> Path:
 
 
 def _dir(prompts_dir: "str | os.PathLike | None") -> Path:
+    if prompts_dir is not None and not isinstance(prompts_dir, (str, os.PathLike)):
+        # else pathlib's "expected str, bytes or os.PathLike object, not int"
+        raise TypeError(f"prompts_dir must be a folder path (str or pathlib.Path) or None, got "
+                        f"{type(prompts_dir).__name__} {prompts_dir!r:.40}")
+    if prompts_dir is not None and not os.fspath(prompts_dir).strip():  # Path("") is "."
+        raise PromptError(f"prompts_dir is empty ({os.fspath(prompts_dir)!r}); pass a folder of "
+                          ".txt templates or None for the installed ones")
     d = Path(prompts_dir) if prompts_dir is not None else default_prompts_dir()
     if not d.is_dir():
         what = "is a file, not a folder" if d.exists() else "does not exist"
@@ -63,10 +70,12 @@ def _read(name: str, prompts_dir: "str | os.PathLike | None") -> tuple[Template,
             f"unknown prompt template {name!r} in {d}; available: {', '.join(list_prompts(d)) or '(none)'}"
         )
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is no prompt text
     except UnicodeDecodeError as exc:  # else a UnicodeDecodeError that names no file
         raise PromptError(f"prompt template {path} is not UTF-8 text ({exc.reason} at byte "
                           f"{exc.start}); save it as UTF-8") from None
+    if not text.strip():  # else an empty prompt was sent to the VLM
+        raise PromptError(f"prompt template {path} is empty")
     return Template(text), path
 
 
@@ -129,9 +138,14 @@ def load_prompt(name: str, /, *, prompts_dir: "str | os.PathLike | None" = None,
 
 
 def format_mark_list(registry: MarkRegistry, ids: Iterable[int] | None = None) -> str:
-    """``"[1], [2], [5]"``: the marks of ``ids`` (default: all registered), by number."""
+    """``"[1], [2], [5]"``: the marks of ``ids`` (default: all registered), by number, each once.
+
+    Raises:
+        TypeError: ``registry`` is not a MarkRegistry, or ``ids`` not an iterable of whole numbers.
+        KeyError: an id that is not registered.
+    """
     check_registry(registry)
-    ids = registry.ids if ids is None else list(ids)
+    ids = registry.ids if ids is None else list(dict.fromkeys(whole_ids(ids, "ids")))  # [3, 3]: one mark
     texts = [registry.text(i) for i in sorted(ids, key=registry.number)]
     return ", ".join(f"[{t}]" for t in texts)
 
@@ -141,7 +155,7 @@ def mark_prompt_variables(registry: MarkRegistry, ids: Iterable[int] | None = No
     (default: all registered). ``cite_example`` shows the first mark, or ``[1]`` /
     ``[a]`` when there are none."""
     check_registry(registry)
-    ids = registry.ids if ids is None else list(ids)
+    ids = registry.ids if ids is None else list(dict.fromkeys(whole_ids(ids, "ids")))  # [3, 3]: 1 mark
     ordered = sorted(ids, key=registry.number)
     first = registry.text(ordered[0]) if ordered else ("1" if registry.style == "number" else "a")
     return {

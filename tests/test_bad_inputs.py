@@ -1139,6 +1139,22 @@ CASES: list[Case] = [
          CLEAR, "p.txt is not UTF-8"),  # was: "'utf-8' codec can't decode byte 0xff" (which file?)
     Case("somprompt/prompts-dir-is-a-file", api(lambda t: __import__("somprompt").list_prompts(
         t.parent / "assets" / "clip.mp4")), CLEAR, "is a file"),  # was: "does not exist"
+    Case("somprompt/prompt-empty", api(lambda t: ((t / "p.txt").write_text("\n  \n"),
+                                                  __import__("somprompt").load_prompt("p", prompts_dir=t))),
+         CLEAR, "p.txt is empty"),  # was: '' returned, an empty prompt sent to the VLM
+    Case("somprompt/prompt-utf8-bom", api(lambda t: ((t / "p.txt").write_bytes("\ufeffWhat moved? ${x}".encode()),
+                                                     __import__("somprompt").load_prompt("p", prompts_dir=t, x=1))[1]),
+         CORRECT, check=lambda o, t: o.value == "What moved? 1"),  # was: '\ufeffWhat moved? 1' (BOM in the prompt)
+    Case("somprompt/prompts-dir-empty-str", api(lambda t: __import__("somprompt").list_prompts("")), CLEAR,
+         "prompts_dir is empty"),  # was: the current folder's .txt files
+    Case("somprompt/prompts-dir-int", api(lambda t: __import__("somprompt").load_prompt("som_vqa", prompts_dir=5)),
+         CLEAR, "prompts_dir must be a folder path"),  # was: "expected str, bytes or os.PathLike object, not int"
+    Case("somprompt/mark-prompt-variables-duplicate-ids", api(lambda t: __import__("somprompt").mark_prompt_variables(
+        __import__("somprompt").MarkRegistry.from_label_maps([_LAB]), [3, 3, 5])), CORRECT,
+         check=lambda o, t: o.value["num_marks"] == "2" and o.value["mark_list"] == "[1], [2]"),  # was: 3, "[1], [1], [2]"
+    Case("somprompt/mark-list-ids-int", api(lambda t: __import__("somprompt").format_mark_list(
+        __import__("somprompt").MarkRegistry.from_label_maps([_LAB]), 3)), CLEAR,
+         "ids must be an iterable"),  # was: "'int' object is not iterable"
     Case("somprompt/mark-list-of-a-list", api(lambda t: __import__("somprompt").format_mark_list([1, 2])), CLEAR,
          "MarkRegistry"),  # was: "'list' object has no attribute 'ids'"
     Case("somprompt/register-fraction", api(lambda t: __import__("somprompt").MarkRegistry().register([1.5])), CLEAR,
@@ -1164,6 +1180,9 @@ CASES: list[Case] = [
     Case("somprompt/mark-text-none", api(lambda t: __import__("somprompt").parse_mark_text(None)), CLEAR, "str"),
     Case("somprompt/parse-1mb", api(lambda t: _parse("the cup [3] " + "x" * 1_000_000, _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [3]),
+    Case("somprompt/parse-unclosed-repeated-list", api(lambda t: _parse("The moved ones: " + "[3, " * 5000, _LAB)),
+         CORRECT, check=lambda o, t: o.value.ids == [] and o.value.unknown == [],
+         limit=5),  # was: 12 s (quadratic: every "[" rescanned the run; 100,000 items: hours)
     Case("somprompt/parse-unicode", api(lambda t: _parse("Der Becher [5] — 移动了 ✓", _LAB)), CORRECT,
          check=lambda o, t: o.value.ids == [5]),
     # ---- vlm_adapters
