@@ -34,8 +34,11 @@ def config_from_dict(values: Mapping[str, Any], *, source: str = "config") -> Mo
         ValueError: an unknown field, a value of the wrong type, or a value the config
             refuses (the message names the field).
     """
+    if not isinstance(values, Mapping):  # else "'NoneType' object is not iterable"
+        raise TypeError(f"{source}: values must be a mapping of MotionBitsConfig fields, got "
+                        f"{type(values).__name__} {values!r:.40}")
     fields = {f.name: f for f in dataclasses.fields(MotionBitsConfig)}
-    unknown = sorted(set(values) - set(fields))
+    unknown = sorted(map(str, set(values) - set(fields)))  # {1: 2}: join's "expected str instance"
     if unknown:
         raise ValueError(f"{source}: unknown MotionBitsConfig field(s) {', '.join(unknown)}; "
                          f"valid fields: {', '.join(fields)}")
@@ -51,8 +54,19 @@ def config_from_dict(values: Mapping[str, Any], *, source: str = "config") -> Mo
     return MotionBitsConfig(**checked)
 
 
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object's dict; ValueError for a key given twice (else the last one won)."""
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise ValueError(f"key {key!r} is given twice")
+        out[key] = value
+    return out
+
+
 def load_config(path: "str | os.PathLike", **overrides: Any) -> MotionBitsConfig:
-    """Read a config from ``path`` (``.toml`` or ``.json``), then apply ``overrides``.
+    """Read a config from ``path`` (``.toml`` or ``.json``, UTF-8 with or without a
+    byte-order mark; a key given twice is an error), then apply ``overrides``.
 
     Example:
         >>> import tempfile, pathlib
@@ -62,6 +76,10 @@ def load_config(path: "str | os.PathLike", **overrides: Any) -> MotionBitsConfig
         >>> c.n_nodes, c.mcl_inflation, c.max_side, c.k_neighbors
         (2500, 1.2, 320, 5)
     """
+    if not isinstance(path, (str, os.PathLike)):  # else "expected str, bytes or os.PathLike object"
+        raise TypeError(f"config path must be a str or pathlib.Path, got {type(path).__name__} {path!r:.40}")
+    if not os.fspath(path).strip():  # Path("") is ".": "config file . is a folder"
+        raise ValueError(f"config path is empty ({os.fspath(path)!r}); pass a .toml or .json file")
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"config file {path} does not exist")
@@ -72,14 +90,18 @@ def load_config(path: "str | os.PathLike", **overrides: Any) -> MotionBitsConfig
     if suffix not in (".toml", ".json"):
         raise ValueError(f"config file {path} must end in .toml or .json")
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark (Notepad) is no syntax error
     except UnicodeDecodeError:
         raise ValueError(f"config file {path} is not a text file (not UTF-8); "
                          f"it must hold {suffix[1:].upper()}") from None
     try:
-        data = tomllib.loads(text) if suffix == ".toml" else json.loads(text)
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"config file {path} is not valid {path.suffix[1:].upper()}: {exc}") from None
+        data = tomllib.loads(text) if suffix == ".toml" else json.loads(
+            text, object_pairs_hook=_unique_keys)
+    except (tomllib.TOMLDecodeError, ValueError, RecursionError) as exc:
+        # ValueError: also JSON's 5000-digit numbers ("Exceeds the limit (4300 digits)") and
+        # repeated keys; RecursionError: 100,000 nested brackets
+        why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise ValueError(f"config file {path} is not valid {path.suffix[1:].upper()}: {why}") from None
     if not isinstance(data, dict):
         raise ValueError(f"config file {path} must hold a table/object of MotionBitsConfig fields")
     if isinstance(data.get("config"), dict):  # a summary.json of `motionbits segment`

@@ -718,6 +718,24 @@ CASES: list[Case] = [
         absent=("out",)),  # was: "'utf-8' codec can't decode byte 0xdb ..." (no file named)
     Case("segment/config-video", cli(S, "{a}/one", "--out", "{t}/out", "--config", "{a}/clip.mp4"), CLEAR,
          "must end in .toml or .json", absent=("out",)),  # was: the UTF-8 error, before the suffix check
+    Case("segment/config-empty-path", cli(S, "{a}/one", "--out", "{t}/out", "--config", "", *SEG), CLEAR,
+         "config path is empty", absent=("out",)),  # was: ignored, the defaults used
+    Case("segment/config-json-key-twice", prepared(lambda t: (t / "c.json").write_text(
+        '{"n_nodes": 400, "n_nodes": 900}'), cli(S, "{a}/one", "--out", "{t}/out", "--config", "{t}/c.json")),
+         CLEAR, "'n_nodes' is given twice", absent=("out",)),  # was: the last one (900) used
+    Case("segment/config-json-nested-deep", prepared(lambda t: (t / "c.json").write_text("[" * 100_000 + "]" * 100_000),
+         cli(S, "{a}/one", "--out", "{t}/out", "--config", "{t}/c.json")), CLEAR, "nested too deeply",
+         absent=("out",)),  # was: RecursionError traceback
+    Case("segment/config-json-5000-digits", prepared(lambda t: (t / "c.json").write_text('{"n_nodes": ' + "9" * 5000 + "}"),
+         cli(S, "{a}/one", "--out", "{t}/out", "--config", "{t}/c.json")), CLEAR, "c.json is not valid JSON",
+         absent=("out",)),  # was: "Exceeds the limit (4300 digits) ..." (no file named)
+    Case("api/config-file-bom", api(lambda t: ((t / "c.toml").write_bytes(b"\xef\xbb\xbfn_nodes = 400\n"),
+                                              __import__("motionbits.config_file").config_file.load_config(t / "c.toml"))[1]),
+         CORRECT, check=lambda o, t: o.value.n_nodes == 400),  # was: "not valid TOML: Invalid statement (line 1, column 1)"
+    Case("api/config-file-path-none", api(lambda t: __import__("motionbits.config_file").config_file.load_config(None)),
+         CLEAR, "config path must be"),  # was: "expected str, bytes or os.PathLike object, not NoneType"
+    Case("api/config-from-dict-none", api(lambda t: __import__("motionbits.config_file").config_file.config_from_dict(None)),
+         CLEAR, "values must be a mapping"),  # was: "'NoneType' object is not iterable"
     Case("segment/unknown-option", cli(S, "{a}/frames", "--out", "{t}/out", "--nodez", "3"), CLEAR, "unrecognized", absent=("out",)),
     # ---- segment: outputs
     Case("segment/out-is-a-file", prepared(a_file("out"), cli(S, "{a}/frames", "--out", "{t}/out")), CLEAR, "is a file"),

@@ -112,7 +112,7 @@ def _check_options(args: argparse.Namespace) -> MotionBitsConfig:
                                 ("refine", args.refine), ("sam2_path", args.sam2),
                                 ("window", args.window)) if v is not None}
     try:
-        config = load_config(args.config, **flags) if args.config else config_from_dict(
+        config = load_config(args.config, **flags) if args.config is not None else config_from_dict(
             flags, source="options")
     except (TypeError, ValueError) as exc:
         raise config_option_error(exc, flags) from None
