@@ -930,6 +930,17 @@ CASES: list[Case] = [
          CORRECT, check=lambda o, t: json.loads((t / "s.json").read_text())["methods"]["gt"]["trials"] == 1,
          requires=mujoco_renders),  # was: 2 trials in gt's row for --trials 1 (each run twice)
     # ---- motionbits API: config
+    Case("stacking-api/methods-str", api(lambda t: __import__("motionbits.stacking").stacking.run_stacking(
+        "gt", 1, 0, progress=None)), CLEAR, "methods must be a list"),  # was: KeyError "unknown method 'g'"
+    Case("stacking-api/trials-true", api(lambda t: __import__("motionbits.stacking").stacking.run_stacking(
+        ["gt"], True, 0, progress=None)), CLEAR, "trials must be a whole number"),  # was: 1 trial run
+    Case("stacking-api/seed-fraction", api(lambda t: __import__("motionbits.stacking").stacking.run_stacking(
+        ["gt"], 1, 1.5, progress=None)), CLEAR, "seed must be a whole number"),  # was: run, TrialResult(seed=1.5)
+    Case("stacking-api/heightmap-res-0", api(lambda t: __import__("motionbits.stacking").stacking.HeightMap(
+        np.zeros((4, 5, 3)), res=0)), CLEAR, "res must be a finite number"),  # was: ZeroDivisionError
+    Case("stacking-api/world-grasp-mask-float", api(lambda t: __import__("motionbits.stacking").stacking.world_grasp(
+        np.ones((4, 5)), np.zeros((4, 5, 3)))), CLEAR, "mask must be an (H, W) bool"),
+    # was: IndexError "arrays used as indices must be of integer (or boolean) type"
     Case("api/config-n_nodes-str", api(lambda t: _config(n_nodes="10000")), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-bool", api(lambda t: _config(n_nodes=True)), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-float", api(lambda t: _config(n_nodes=100.5)), CLEAR, "n_nodes"),

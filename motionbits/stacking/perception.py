@@ -11,6 +11,7 @@ table plane, and the same image-space function the agent tool uses
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import cv2
@@ -107,6 +108,13 @@ def world_grasp(mask: np.ndarray, points: np.ndarray, min_height: float = 0.005)
         points: (H, W, 3) world coordinates of every pixel (:meth:`PinholeCamera.backproject`).
         min_height: metres above the table (z = 0) a point must be to count.
     """
+    mask, points = np.asarray(mask), np.asarray(points)
+    if mask.dtype != np.bool_:  # else IndexError (float) or a gather of rows 0 and 1 (int)
+        raise TypeError(f"mask must be an (H, W) bool array, got dtype {mask.dtype}")
+    if points.ndim != 3 or points.shape[2] != 3 or mask.shape != points.shape[:2]:
+        raise ValueError(f"mask {mask.shape} and points {points.shape} must be (H, W) and (H, W, 3)")
+    if not math.isfinite(min_height):  # NaN: no point counted, None returned
+        raise ValueError(f"min_height must be a finite number of metres, got {min_height!r}")
     pts = points[mask]
     pts = pts[np.all(np.isfinite(pts), axis=1) & (pts[:, 2] > min_height)]
     if len(pts) == 0:
@@ -144,8 +152,17 @@ class HeightMap:
     """
 
     def __init__(self, points: np.ndarray, bounds=(-0.5, 0.5, -0.4, 0.4), res: float = 0.004) -> None:
-        self.bounds, self.res = bounds, res
         x0, x1, y0, y1 = bounds
+        if not (isinstance(res, numbers.Real) and not isinstance(res, bool) and math.isfinite(res) and res > 0):
+            # else ZeroDivisionError (0), "cannot convert float NaN to integer", or numpy's
+            # "negative dimensions are not allowed" (-0.01)
+            raise ValueError(f"res must be a finite number of metres > 0, got {res!r}")
+        if not (x0 < x1 and y0 < y1):
+            raise ValueError(f"bounds must be (x0, x1, y0, y1) with x0 < x1 and y0 < y1, got {bounds!r}")
+        points = np.asarray(points)
+        if points.ndim < 2 or points.shape[-1] != 3:  # else (H, W) read as 3-vectors
+            raise ValueError(f"points must be (H, W, 3) world coordinates, got shape {points.shape}")
+        self.bounds, self.res = bounds, res
         self.shape = (int(math.ceil((y1 - y0) / res)), int(math.ceil((x1 - x0) / res)))
         pts = points.reshape(-1, 3)
         pts = pts[np.all(np.isfinite(pts), axis=1)]

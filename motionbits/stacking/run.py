@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motionbits.frames import whole_number
 from motionbits.stacking.trial import (
     FAILURES,
     TrialConfig,
@@ -40,12 +41,26 @@ def run_stacking(methods: list[str], trials: int, seed: int, *, config: TrialCon
 
     Raises:
         KeyError: an unknown method name.
-        ValueError: ``trials < 1``.
+        TypeError: ``methods`` is not a list of names (a str is refused: "gt" read as
+            "g", "t"), ``trials`` or ``seed`` not a whole number, ``config`` not a
+            :class:`TrialConfig`.
+        ValueError: no method, ``trials < 1`` or ``seed < 0``.
     """
     from motionbits.baselines import make_method
 
-    if trials < 1:
+    if isinstance(methods, (str, bytes)) or not all(isinstance(m, str) for m in methods):
+        raise TypeError(f"methods must be a list of method names, got {methods!r:.60}")
+    methods = list(methods)
+    if not methods:  # else {}: an empty table
+        raise ValueError("methods is empty: name at least one method (or 'gt')")
+    if whole_number("trials", trials) < 1:  # True ran 1 trial, 2.5 failed in range()
         raise ValueError(f"--trials must be >= 1, got {trials}")
+    trials = int(trials)
+    if whole_number("seed", seed) < 0:  # 1.5 ran (seeded with a float), -1 failed in numpy
+        raise ValueError(f"seed must be >= 0, got {seed}")
+    seed = int(seed)
+    if not isinstance(config, TrialConfig):  # else "'dict' object has no attribute 'width'"
+        raise TypeError(f"config must be a TrialConfig, got {type(config).__name__}")
     fns = {m: (None if m == GT else make_method(m)) for m in methods}
     results: dict[str, list[TrialResult]] = {m: [] for m in methods}
     for i in range(trials):
