@@ -805,6 +805,8 @@ CASES: list[Case] = [
          CLEAR, "pip install", absent=("s",)),
     Case("synth/size-too-small", cli("synth", "--track", "robot", "--out", "{t}/s", "--size", "16x16"), CLEAR, "too small", absent=("s",)),
     Case("synth/scenes-0", cli("synth", "--track", "robot", "--out", "{t}/s", "--scenes", "0"), CLEAR, "--scenes", absent=("s",)),
+    Case("synth/scenes-huge", cli("synth", "--track", "robot", "--out", "{t}/s", "--scenes", "10" * 10, "--quiet"),
+         CLEAR, "--scenes must be at most 10000", absent=("s",)),  # was: OverflowError traceback (tqdm's len)
     Case("synth/frames-1", cli("synth", "--track", "robot", "--out", "{t}/s", "--frames", "1"), CLEAR, "--frames", absent=("s",)),
     Case("synth/seed-negative", cli("synth", "--track", "robot", "--out", "{t}/s", "--seed", "-1", "--scenes", "1",
                                     "--frames", "2", "--size", "64x48", "--quiet"), CLEAR, "--seed", absent=("s",)),

@@ -11,6 +11,9 @@ from motionbits.outputs import StagedFolder, check_named
 
 __all__ = ["register", "run"]
 
+#: Most scenes per track: their folders are numbered with four digits.
+MAX_SCENES = 10_000
+
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
@@ -28,7 +31,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="track to generate (repeat for several): robot, hand (pushes), pickplace "
                         "(harder: natural textures, shadows, an articulated hand or gripper "
                         "carries a block across the table while other bodies move)")
-    p.add_argument("--scenes", type=int, default=40, metavar="N", help="scenes per track (40)")
+    p.add_argument("--scenes", type=int, default=40, metavar="N", help="scenes per track (40, at most 10000)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (0)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (DIR/<track>/...)")
     p.add_argument("--size", default="640x480", metavar="WxH", help="frame size (640x480)")
@@ -67,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--out {args.out} is a file, not a folder")
     if args.scenes < 1:
         raise InputError("--scenes must be at least 1")
+    if args.scenes > MAX_SCENES:  # 10**20: an OverflowError traceback from the progress bar
+        raise InputError(f"--scenes must be at most {MAX_SCENES} (scene_0000 .. scene_9999), got {args.scenes}")
     if args.frames is not None and args.frames < 2:
         raise InputError("--frames must be at least 2")
     if args.seed < 0:  # numpy's seed sequence refuses it ("expected non-negative integer")
