@@ -63,7 +63,7 @@ from motionbits.revealed import (WINDOW, _color_difference, follow_ids, follow_k
 from motionbits.setdown import COMPACT_CELLS, SETDOWN_CELLS
 
 __all__ = ["Arrivals", "Arrival", "LIGHT_CHROMA", "LIGHT_RESIDUAL", "SURROUND_DIFFERENCE",
-           "JOIN_CELLS"]
+           "JOIN_CELLS", "surroundings_colour"]
 
 #: Largest median change of chromaticity (each channel over the sum of the three) of a
 #: piece that is the static world under other light ...
@@ -325,6 +325,18 @@ def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
     return bool(np.median(chroma) < LIGHT_CHROMA and residual < LIGHT_RESIDUAL)
 
 
+def surroundings_colour(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, slice],
+                        piece: np.ndarray) -> np.ndarray | None:
+    """(3,) float64 mean colour in ``cur`` ((H, W, 3) uint8) of the unlabelled ring
+    ``SURROUND_RING`` around ``piece`` (bool, in the image box ``box`` of the (H, W)
+    ``labels``); None where fewer than ``SURROUND_MIN`` such pixels surround it."""
+    around_box, ring = _ring(labels.shape, box, piece, *SURROUND_RING)
+    ring &= labels[around_box] == 0
+    if np.count_nonzero(ring) < SURROUND_MIN:
+        return None
+    return cur[around_box][ring].mean(axis=0)
+
+
 def _like_surroundings(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, slice],
                        piece: np.ndarray, remembered: np.ndarray | None) -> bool:
     """Whether ``piece`` (bool, in the image box ``box``) is background that continues its
@@ -333,11 +345,9 @@ def _like_surroundings(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, sl
     and its mean colour in ``remembered`` ((H, W, 3) uint8, the static world seen) is
     not (None: not asked -- a memory carried along a moving camera's model is misaligned
     where the scene has depth, and a textured surface reads as changed there)."""
-    around_box, ring = _ring(labels.shape, box, piece, *SURROUND_RING)
-    ring &= labels[around_box] == 0
-    if ring.sum() < SURROUND_MIN:
+    around = surroundings_colour(cur, labels, box, piece)
+    if around is None:
         return False
-    around = cur[around_box][ring].mean(axis=0)
     inside = cur[box][piece].mean(axis=0)
     if np.abs(inside - around).max() >= SURROUND_DIFFERENCE:
         return False

@@ -547,9 +547,11 @@ class MotionBitsSegmenter:
             still_marks = {r for r in rep.values() if r} - moving_marks
             shown = self._rest_marks.hold(shown, cur, state, still_marks)
             # nothing moved where a mark stands as first seen (a static body marked through
-            # parallax or smeared flow)
+            # parallax or smeared flow), nor where a mark at rest shows the table a body
+            # first seen there has left
             if calm is not None:
                 shown = drop_labels(shown, self._first_look.as_first_seen(shown, cur))
+                shown = drop_labels(shown, self._first_look.uncovered(shown, cur, still_marks))
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

@@ -218,6 +218,51 @@ def test_a_mark_that_stands_as_first_seen_is_found_and_a_moved_body_is_not():
     assert first.as_first_seen(np.zeros_like(labels), now).size == 0
 
 
+def test_a_mark_left_on_the_table_a_block_was_lifted_from_is_found_uncovered():
+    """A block at rest when first seen is lifted away; a MotionBit born in its wake (the
+    flow smeared there) stays on the table it left: that mark shows the table around it
+    where the first look saw the block. A block pushed 10 px (its mark still the block's
+    colour), a table-coloured block set down where the table was first seen, a mark the
+    first look barely knows and a moving mark are not found; one found stays found while
+    it is at rest where it was found, and is forgotten once it is not."""
+    table = _table(7)
+    first_rgb = table.copy()
+    first_rgb[40:100, 40:100] = (230, 230, 230)  # a white block, lifted away later
+    first_rgb[140:200, 60:120] = (40, 40, 200)  # a blue block, pushed 10 px right
+    first = FirstLook((240, 320), covered=20.0)
+    known = np.ones((240, 320), bool)
+    known[20:60, 230:290] = False  # first seen under a hand, say
+    first.update(first_rgb, known, np.zeros((240, 320), np.int32))
+    now = table.copy()
+    now[140:200, 70:130] = (40, 40, 200)
+    tint = table[150:190, 200:260].mean(axis=(0, 1))
+    now[150:190, 200:260] = np.clip(tint + 8, 0, 255).astype(np.uint8)  # set down
+    labels = np.zeros((240, 320), np.int32)
+    labels[45:95, 45:95] = 3  # the lifted block's wake: the table now
+    labels[140:200, 70:130] = 5  # the pushed block
+    labels[150:190, 200:260] = 6  # the table-coloured block set down
+    labels[20:60, 230:290] = 8  # table first seen under the hand
+    labels[10:30, 40:100] = 9  # moving: not a candidate
+    assert first.uncovered(labels, now, {3, 5, 6, 8}) == [3]
+    # found, it stays found while its mark stays where it was (its colour near the limit)
+    tinted = now.copy()
+    tinted[45:95, 45:95] = np.clip(now[45:95, 45:95].astype(int) + 40, 0, 255)
+    assert first.uncovered(labels, tinted, {3, 5, 6, 8}) == [3]
+    first._uncovered.clear()
+    assert first.uncovered(labels, tinted, {3, 5, 6, 8}) == []
+    assert first.uncovered(labels, now, {3, 5, 6, 8}) == [3]
+    # ... but the id shown for another body (its group's oldest id) is judged again
+    regrouped = np.where(labels == 5, 3, np.where(labels == 3, 0, labels))
+    assert first.uncovered(regrouped, now, {3, 6, 8}) == []
+    assert first.uncovered(labels, now, {3, 5, 6, 8}) == [3]
+    # once it moves (not a candidate) it is no longer found ...
+    assert first.uncovered(labels, now, {5, 6, 8}) == []
+    # ... and at rest again it is judged again, on what it shows: here the block itself
+    back = now.copy()
+    back[40:100, 40:100] = (230, 230, 230)
+    assert first.uncovered(labels, back, {3, 5, 6, 8}) == []
+
+
 def test_a_top_face_mark_reaches_its_body_s_side_beyond_its_box(monkeypatch):
     """A mark on a block's top face (where the flow read its motion) is a small part of the
     block seen from above at an angle: its darker side runs on past the box the cut works
