@@ -943,6 +943,14 @@ CASES: list[Case] = [
     Case("stacking-api/world-grasp-mask-float", api(lambda t: __import__("motionbits.stacking").stacking.world_grasp(
         np.ones((4, 5)), np.zeros((4, 5, 3)))), CLEAR, "mask must be an (H, W) bool"),
     # was: IndexError "arrays used as indices must be of integer (or boolean) type"
+    Case("stacking-api/trial-config-width-0", api(lambda t: __import__("motionbits.stacking").stacking.TrialConfig(
+        width=0)), CLEAR, "width must be in [32, 16384]"),  # was: accepted (MuJoCo failed minutes later)
+    Case("stacking-api/trial-config-frame-dt-0", api(lambda t: __import__("motionbits.stacking").stacking.TrialConfig(
+        frame_dt=0)), CLEAR, "frame_dt must be > 0"),  # was: accepted (1 / frame_dt for the video)
+    Case("stacking-api/summarise-none", api(lambda t: __import__("motionbits.stacking").stacking.summarise(None)),
+         CLEAR, "results must be a dict"),  # was: AttributeError "'NoneType' object has no attribute 'items'"
+    Case("stacking-api/format-table-empty", api(lambda t: __import__("motionbits.stacking").stacking.format_table({})),
+         CLEAR, "summary must be a dict as summarise returns"),  # was: KeyError 'methods'
     Case("api/config-n_nodes-str", api(lambda t: _config(n_nodes="10000")), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-bool", api(lambda t: _config(n_nodes=True)), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-float", api(lambda t: _config(n_nodes=100.5)), CLEAR, "n_nodes"),
@@ -1081,6 +1089,11 @@ CASES: list[Case] = [
     # was: "'float' object cannot be interpreted as an integer"
     Case("synth-api/demo-clip-size-int", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
         n_frames=2, size=40)), CLEAR, "size must be (height, width)"),  # was: "'int' object is not subscriptable"
+    Case("synth-api/demo-clip-size-huge", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
+        n_frames=2, size=(10**6, 10**6))), CLEAR, "size must be at most"),  # was: MemoryError
+    Case("synth-api/render-clip-too-long", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
+        [], size=(480, 640), n_frames=10**5)), CLEAR, "n_frames x height x width must be at most"),
+    # was: 215 GB of frames and labels asked for (a MemoryError, or swapping)
     Case("synth-api/render-size-0", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
         [], size=(0, 0), n_frames=2)), CLEAR, "size must be (height, width)"),  # was: OpenCV "inv_scale_x > 0"
     Case("synth-api/render-seed-negative", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
