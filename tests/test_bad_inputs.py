@@ -573,6 +573,19 @@ def _seg():
     return Segmentation("clip.mp4", [0, 1], [np.zeros((20, 20, 3), np.uint8)] * 2, [_LAB, _LAB])
 
 
+def _h264_failed_over(tmp, frames):
+    """write_h264 ``frames`` over an earlier file: it must fail and leave that file as it was."""
+    from motionbits.video_writer import write_h264
+
+    old = tmp / "v.mp4"
+    old.write_bytes(b"an earlier video")
+    try:
+        write_h264(frames, old)
+    except ValueError:
+        return old.read_bytes(), sorted(p.name for p in tmp.iterdir())
+    return None
+
+
 def _zip(tmp, maps, indices):
     from demos.media import write_labels_zip
 
@@ -708,6 +721,8 @@ CASES: list[Case] = [
     Case("segment/fps-inf", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "inf"), CLEAR, "--fps", absent=("out",)),
     Case("segment/fps-huge", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "1e300"), CLEAR, "--fps must be at most",
          absent=("out",)),  # was: OverflowError traceback from PyAV
+    Case("segment/fps-tiny", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "1e-6"), CLEAR,
+         "--fps must be at least 0.001", absent=("out",)),  # was: the overlay written at 24 fps
     Case("segment/backend-unknown", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "cuda"), CLEAR, "backend", absent=("out",)),
     Case("segment/backend-torch-without-torch", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "torch",
                                                     patches=(no_torch_ops,)), CLEAR, "torch", absent=("out",)),
@@ -1170,6 +1185,27 @@ CASES: list[Case] = [
          CLEAR, "must end in .mp4"),
     Case("somprompt/write-mp4-fps-huge", api(lambda t: __import__("somprompt").write_mp4(list(_F), t / "v.mp4", fps=1e300)),
          CLEAR, "fps must be"),  # was: OverflowError
+    Case("video/write-h264-empty-keeps-old", api(lambda t: _h264_failed_over(t, [])), CORRECT,
+         check=lambda o, t: o.value == (b"an earlier video", ["v.mp4"])),  # was: the earlier file deleted
+    Case("video/write-h264-mixed-sizes-keeps-old", api(lambda t: _h264_failed_over(
+        t, [_F[0], _F[0][:60]])), CORRECT, check=lambda o, t: o.value == (b"an earlier video", ["v.mp4"])),
+    # was: the earlier file replaced by a half-written video of the first frame
+    Case("video/write-h264-fps-tiny", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        list(_F), t / "v.mp4", fps=1e-6)), CLEAR, "fps must be a number >= 0.001", absent=("v.mp4",)),
+    # was: written at 24 fps (the rate rounded to 0)
+    Case("video/write-h264-fps-float32", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        list(_F), t / "v.mp4", fps=np.float32(5))), CORRECT, check=lambda o, t: (t / "v.mp4").stat().st_size > 0),
+    # was: TypeError "argument should be a string or a Rational instance"
+    Case("video/h264-crf-negative", api(lambda t: __import__("motionbits.video_writer").video_writer.H264Writer(
+        t / "v.mp4", crf=-5)), CLEAR, "crf must be in [0, 51]"),  # was: OverflowError from PyAV on the first frame
+    Case("video/write-h264-frames-none", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        None, t / "v.mp4")), CLEAR, "frames must be an iterable"),  # was: "'NoneType' object is not iterable"
+    Case("video/write-h264-too-wide", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        [np.zeros((2, 20000, 3), np.uint8)], t / "v.mp4")), CLEAR, "at most 16384 pixels a side",
+         absent=("v.mp4",)),  # was: av ExternalError "Generic error in an external library"
+    Case("video/write-h264-parent-is-file", api(lambda t: (a_file("f")(t), __import__(
+        "motionbits.video_writer").video_writer.write_h264(list(_F), t / "f" / "v.mp4"))), CLEAR,
+         "is a file, not a folder"),  # was: FileExistsError "[Errno 17] File exists: '.../f'"
     Case("somprompt/write-gif-to-folder", api(lambda t: __import__("somprompt").write_gif(list(_F), t)), CLEAR,
          "is a folder"),  # was: PIL's "unknown file extension: "
     Case("somprompt/write-gif-fps-tiny", api(lambda t: __import__("somprompt").write_gif(list(_F), t / "v.gif", fps=1e-3)),
