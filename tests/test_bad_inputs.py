@@ -586,6 +586,19 @@ def _h264_failed_over(tmp, frames):
     return None
 
 
+_BATCH_OPT = {"nodes": 400, "max_side": 160}
+
+
+def _run_batch(tmp, items, out="o", options=_BATCH_OPT, **kw):
+    """run_batch over ``items`` (paths under assets, or BatchInputs) on one worker."""
+    from motionbits.batch import BatchInput, run_batch
+
+    items = [it if not isinstance(it, str) else BatchInput(str(tmp.parent / "assets" / it), Path(it).stem)
+             for it in items]
+    return run_batch(items, out if out == "" else str(tmp / out), options, workers=kw.pop("workers", 1),
+                     quiet=True, **kw)
+
+
 def _zip(tmp, maps, indices):
     from demos.media import write_labels_zip
 
@@ -932,6 +945,28 @@ CASES: list[Case] = [
          and all(n[-9] == "-" for n in o.value)),  # stem-<8 hex>
     # was: named batch.jsonl (its output renamed over the journal: "[Errno 21] Is a directory") and
     # .partial (its output renamed onto the folder of unfinished outputs: the video failed)
+    Case("batch-api/expand-inputs-str", api(lambda t: __import__("motionbits.batch").batch.expand_inputs(
+        "clip.mp4", cwd=t.parent / "assets")), CLEAR, "items must be a list of inputs"),
+    # was: read letter by letter ("input not found: c"; "/..." searched the whole file system)
+    Case("batch-api/run-batch-items-str", api(lambda t: __import__("motionbits.batch").batch.run_batch(
+        [str(t.parent / "assets" / "clip.mp4")], str(t / "o"))), CLEAR, "items must be a list of BatchInput",
+         absent=("o",)),  # was: AttributeError "'str' object has no attribute 'path'" after o/ was made
+    Case("batch-api/run-batch-unknown-option", api(lambda t: _run_batch(t, ["clip.mp4"], options={"nodez": 400})),
+         CLEAR, "unknown segment option(s) 'nodez'", absent=("o",)),  # was: ignored, the default nodes used
+    Case("batch-api/run-batch-bad-option", api(lambda t: _run_batch(t, ["clip.mp4"], options={"nodes": 0})),
+         CLEAR, "n_nodes=0", absent=("o",)),  # was: every video started, then recorded as failed
+    Case("batch-api/run-batch-one-name-twice", api(lambda t: _run_batch(t, [
+        __import__("motionbits.batch").batch.BatchInput(str(t.parent / "assets" / p), "c")
+        for p in ("clip.mp4", "clip.avi")])), CLEAR, "two videos of name 'c'", absent=("o",)),
+    # was: the second output replaced the first, both recorded as done with output o/c
+    Case("batch-api/run-batch-repeat-runs-once", api(lambda t: _run_batch(t, ["clip.mp4", "clip.mp4"])),
+         CORRECT, check=lambda o, t: (o.value.done, len((t / "o" / "batch.jsonl").read_text().splitlines())) == (1, 1)),
+    # was: segmented twice, two records, done=2 for one video
+    Case("batch-api/run-batch-out-empty", in_tmp(api(lambda t: _run_batch(t, ["clip.mp4"], out=""))), CLEAR,
+         "out_dir must name the batch folder", absent=("batch.jsonl", "clip")),
+    # was: clip/ and batch.jsonl written into the current folder
+    Case("batch-api/run-batch-workers-fraction", api(lambda t: _run_batch(t, ["clip.mp4"], workers=1.5)), CLEAR,
+         "workers must be a whole number", absent=("o",)),  # was: "'float' object cannot be interpreted as an integer"
     # ---- stack (checked before the trials: minutes of simulation)
     Case("stack/json-empty", cli("stack", "--json", ""), CLEAR,
          "--json is empty"),  # was: ran every trial, wrote no JSON, exit 0
