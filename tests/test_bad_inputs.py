@@ -1134,6 +1134,19 @@ CASES: list[Case] = [
         _LAB + 0.5, _LAB)), CLEAR, "whole-number labels"),  # was: 1.0 (3.5 and 5.5 read as labels)
     Case("eval-api/ari-negative", api(lambda t: __import__("motionbits.eval").eval.adjusted_rand_index(
         -_LAB, _LAB)), CLEAR, "negative labels"),  # was: 1.0 (-1, void, read as a label)
+    Case("eval-api/body-kinds-meta-nested-deep", api(lambda t: ((t / "meta.json").write_text("[" * 100_000),
+                                                             __import__("motionbits.eval.kinds").eval.kinds.body_kinds(t))[1]),
+         CORRECT, check=lambda o, t: o.value == {}),  # was: RecursionError traceback (documented: not JSON -> {})
+    Case("eval-api/body-kinds-one-bad-id", api(lambda t: ((t / "meta.json").write_text(json.dumps(
+        {"labels": {"1": {"kind": "box"}, "1.5": {"kind": "cup"}}})),
+        __import__("motionbits.eval.kinds").eval.kinds.body_kinds(t))[1]),
+        CORRECT, check=lambda o, t: o.value == {1: "box"}),  # was: {} (one bad id dropped every kind)
+    Case("flow-api/raft-from-file-none", api(lambda t: __import__("motionbits.flow_raft").flow_raft.RAFTFlow.from_file(
+        None)), CLEAR, "RAFT weights must be a file path"),  # was: "expected str, bytes or os.PathLike object"
+    Case("flow-api/raft-from-file-folder", api(lambda t: __import__("motionbits.flow_raft").flow_raft.RAFTFlow.from_file(
+        t)), CLEAR, "is a folder"),  # was: "RAFT weights file '...' does not exist" (it does: a folder)
+    Case("flow-api/raft-from-spec-none", api(lambda t: __import__("motionbits.flow_raft").flow_raft.RAFTFlow.from_spec(
+        None)), CLEAR, "a RAFT flow spec is 'raft:PATH'"),  # was: AttributeError "'NoneType' ... 'partition'"
     Case("synth-api/demo-clip-n-frames-fraction", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
         n_frames=2.5, size=(40, 50))), CLEAR, "n_frames must be a whole number"),
     # was: "'float' object cannot be interpreted as an integer"
