@@ -70,13 +70,20 @@ class RAFTFlow:
         `iters`, `device` and `threads`: see the class docstring.
 
         Raises:
-            FileNotFoundError: no file at `path`.
+            TypeError: `path` is not a (non-empty) path.
+            FileNotFoundError / IsADirectoryError: no file at `path`, or a folder.
             MissingDependencyError: torch / torchvision missing or failing to import.
             ValueError: the file is not a state dict of either architecture.
         """
         from motionbits.objects import require
 
+        if not isinstance(path, (str, os.PathLike)) or not os.fspath(path).strip():
+            # else "expected str, bytes or os.PathLike object" / "'' does not exist"
+            raise TypeError(f"RAFT weights must be a file path, got {type(path).__name__} {path!r:.40}")
         path = os.path.expanduser(os.fspath(path))
+        if os.path.isdir(path):  # was reported as "does not exist"
+            raise IsADirectoryError(f"RAFT weights file '{path}' is a folder; pass the weights file in it "
+                                    "(a torchvision RAFT state dict, .pth)")
         if not os.path.isfile(path):
             raise FileNotFoundError(
                 f"RAFT weights file '{path}' does not exist; pass a torchvision RAFT state dict, "
@@ -104,6 +111,8 @@ class RAFTFlow:
     @classmethod
     def from_spec(cls, spec: str) -> RAFTFlow:
         """Build from a flow spec ``"raft:PATH"`` (the part after ``raft:`` is the path)."""
+        if not isinstance(spec, str):  # None: AttributeError 'partition'
+            raise TypeError(f"a RAFT flow spec is 'raft:PATH' (a weights file), got {type(spec).__name__} {spec!r:.40}")
         prefix, sep, path = spec.partition(":")
         if prefix.lower() != "raft" or not sep or not path:
             raise ValueError(f"a RAFT flow spec is 'raft:PATH' (a weights file), got {spec!r}")

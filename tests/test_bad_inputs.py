@@ -573,6 +573,32 @@ def _seg():
     return Segmentation("clip.mp4", [0, 1], [np.zeros((20, 20, 3), np.uint8)] * 2, [_LAB, _LAB])
 
 
+def _h264_failed_over(tmp, frames):
+    """write_h264 ``frames`` over an earlier file: it must fail and leave that file as it was."""
+    from motionbits.video_writer import write_h264
+
+    old = tmp / "v.mp4"
+    old.write_bytes(b"an earlier video")
+    try:
+        write_h264(frames, old)
+    except ValueError:
+        return old.read_bytes(), sorted(p.name for p in tmp.iterdir())
+    return None
+
+
+_BATCH_OPT = {"nodes": 400, "max_side": 160}
+
+
+def _run_batch(tmp, items, out="o", options=_BATCH_OPT, **kw):
+    """run_batch over ``items`` (paths under assets, or BatchInputs) on one worker."""
+    from motionbits.batch import BatchInput, run_batch
+
+    items = [it if not isinstance(it, str) else BatchInput(str(tmp.parent / "assets" / it), Path(it).stem)
+             for it in items]
+    return run_batch(items, out if out == "" else str(tmp / out), options, workers=kw.pop("workers", 1),
+                     quiet=True, **kw)
+
+
 def _zip(tmp, maps, indices):
     from demos.media import write_labels_zip
 
@@ -708,6 +734,8 @@ CASES: list[Case] = [
     Case("segment/fps-inf", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "inf"), CLEAR, "--fps", absent=("out",)),
     Case("segment/fps-huge", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "1e300"), CLEAR, "--fps must be at most",
          absent=("out",)),  # was: OverflowError traceback from PyAV
+    Case("segment/fps-tiny", cli(S, "{a}/frames", "--out", "{t}/out", "--fps", "1e-6"), CLEAR,
+         "--fps must be at least 0.001", absent=("out",)),  # was: the overlay written at 24 fps
     Case("segment/backend-unknown", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "cuda"), CLEAR, "backend", absent=("out",)),
     Case("segment/backend-torch-without-torch", cli(S, "{a}/frames", "--out", "{t}/out", "--backend", "torch",
                                                     patches=(no_torch_ops,)), CLEAR, "torch", absent=("out",)),
@@ -917,6 +945,28 @@ CASES: list[Case] = [
          and all(n[-9] == "-" for n in o.value)),  # stem-<8 hex>
     # was: named batch.jsonl (its output renamed over the journal: "[Errno 21] Is a directory") and
     # .partial (its output renamed onto the folder of unfinished outputs: the video failed)
+    Case("batch-api/expand-inputs-str", api(lambda t: __import__("motionbits.batch").batch.expand_inputs(
+        "clip.mp4", cwd=t.parent / "assets")), CLEAR, "items must be a list of inputs"),
+    # was: read letter by letter ("input not found: c"; "/..." searched the whole file system)
+    Case("batch-api/run-batch-items-str", api(lambda t: __import__("motionbits.batch").batch.run_batch(
+        [str(t.parent / "assets" / "clip.mp4")], str(t / "o"))), CLEAR, "items must be a list of BatchInput",
+         absent=("o",)),  # was: AttributeError "'str' object has no attribute 'path'" after o/ was made
+    Case("batch-api/run-batch-unknown-option", api(lambda t: _run_batch(t, ["clip.mp4"], options={"nodez": 400})),
+         CLEAR, "unknown segment option(s) 'nodez'", absent=("o",)),  # was: ignored, the default nodes used
+    Case("batch-api/run-batch-bad-option", api(lambda t: _run_batch(t, ["clip.mp4"], options={"nodes": 0})),
+         CLEAR, "n_nodes=0", absent=("o",)),  # was: every video started, then recorded as failed
+    Case("batch-api/run-batch-one-name-twice", api(lambda t: _run_batch(t, [
+        __import__("motionbits.batch").batch.BatchInput(str(t.parent / "assets" / p), "c")
+        for p in ("clip.mp4", "clip.avi")])), CLEAR, "two videos of name 'c'", absent=("o",)),
+    # was: the second output replaced the first, both recorded as done with output o/c
+    Case("batch-api/run-batch-repeat-runs-once", api(lambda t: _run_batch(t, ["clip.mp4", "clip.mp4"])),
+         CORRECT, check=lambda o, t: (o.value.done, len((t / "o" / "batch.jsonl").read_text().splitlines())) == (1, 1)),
+    # was: segmented twice, two records, done=2 for one video
+    Case("batch-api/run-batch-out-empty", in_tmp(api(lambda t: _run_batch(t, ["clip.mp4"], out=""))), CLEAR,
+         "out_dir must name the batch folder", absent=("batch.jsonl", "clip")),
+    # was: clip/ and batch.jsonl written into the current folder
+    Case("batch-api/run-batch-workers-fraction", api(lambda t: _run_batch(t, ["clip.mp4"], workers=1.5)), CLEAR,
+         "workers must be a whole number", absent=("o",)),  # was: "'float' object cannot be interpreted as an integer"
     # ---- stack (checked before the trials: minutes of simulation)
     Case("stack/json-empty", cli("stack", "--json", ""), CLEAR,
          "--json is empty"),  # was: ran every trial, wrote no JSON, exit 0
@@ -943,6 +993,14 @@ CASES: list[Case] = [
     Case("stacking-api/world-grasp-mask-float", api(lambda t: __import__("motionbits.stacking").stacking.world_grasp(
         np.ones((4, 5)), np.zeros((4, 5, 3)))), CLEAR, "mask must be an (H, W) bool"),
     # was: IndexError "arrays used as indices must be of integer (or boolean) type"
+    Case("stacking-api/trial-config-width-0", api(lambda t: __import__("motionbits.stacking").stacking.TrialConfig(
+        width=0)), CLEAR, "width must be in [32, 16384]"),  # was: accepted (MuJoCo failed minutes later)
+    Case("stacking-api/trial-config-frame-dt-0", api(lambda t: __import__("motionbits.stacking").stacking.TrialConfig(
+        frame_dt=0)), CLEAR, "frame_dt must be > 0"),  # was: accepted (1 / frame_dt for the video)
+    Case("stacking-api/summarise-none", api(lambda t: __import__("motionbits.stacking").stacking.summarise(None)),
+         CLEAR, "results must be a dict"),  # was: AttributeError "'NoneType' object has no attribute 'items'"
+    Case("stacking-api/format-table-empty", api(lambda t: __import__("motionbits.stacking").stacking.format_table({})),
+         CLEAR, "summary must be a dict as summarise returns"),  # was: KeyError 'methods'
     Case("api/config-n_nodes-str", api(lambda t: _config(n_nodes="10000")), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-bool", api(lambda t: _config(n_nodes=True)), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-float", api(lambda t: _config(n_nodes=100.5)), CLEAR, "n_nodes"),
@@ -1076,11 +1134,29 @@ CASES: list[Case] = [
         _LAB + 0.5, _LAB)), CLEAR, "whole-number labels"),  # was: 1.0 (3.5 and 5.5 read as labels)
     Case("eval-api/ari-negative", api(lambda t: __import__("motionbits.eval").eval.adjusted_rand_index(
         -_LAB, _LAB)), CLEAR, "negative labels"),  # was: 1.0 (-1, void, read as a label)
+    Case("eval-api/body-kinds-meta-nested-deep", api(lambda t: ((t / "meta.json").write_text("[" * 100_000),
+                                                             __import__("motionbits.eval.kinds").eval.kinds.body_kinds(t))[1]),
+         CORRECT, check=lambda o, t: o.value == {}),  # was: RecursionError traceback (documented: not JSON -> {})
+    Case("eval-api/body-kinds-one-bad-id", api(lambda t: ((t / "meta.json").write_text(json.dumps(
+        {"labels": {"1": {"kind": "box"}, "1.5": {"kind": "cup"}}})),
+        __import__("motionbits.eval.kinds").eval.kinds.body_kinds(t))[1]),
+        CORRECT, check=lambda o, t: o.value == {1: "box"}),  # was: {} (one bad id dropped every kind)
+    Case("flow-api/raft-from-file-none", api(lambda t: __import__("motionbits.flow_raft").flow_raft.RAFTFlow.from_file(
+        None)), CLEAR, "RAFT weights must be a file path"),  # was: "expected str, bytes or os.PathLike object"
+    Case("flow-api/raft-from-file-folder", api(lambda t: __import__("motionbits.flow_raft").flow_raft.RAFTFlow.from_file(
+        t)), CLEAR, "is a folder"),  # was: "RAFT weights file '...' does not exist" (it does: a folder)
+    Case("flow-api/raft-from-spec-none", api(lambda t: __import__("motionbits.flow_raft").flow_raft.RAFTFlow.from_spec(
+        None)), CLEAR, "a RAFT flow spec is 'raft:PATH'"),  # was: AttributeError "'NoneType' ... 'partition'"
     Case("synth-api/demo-clip-n-frames-fraction", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
         n_frames=2.5, size=(40, 50))), CLEAR, "n_frames must be a whole number"),
     # was: "'float' object cannot be interpreted as an integer"
     Case("synth-api/demo-clip-size-int", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
         n_frames=2, size=40)), CLEAR, "size must be (height, width)"),  # was: "'int' object is not subscriptable"
+    Case("synth-api/demo-clip-size-huge", api(lambda t: __import__("motionbits.synth").synth.demo_clip(
+        n_frames=2, size=(10**6, 10**6))), CLEAR, "size must be at most"),  # was: MemoryError
+    Case("synth-api/render-clip-too-long", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
+        [], size=(480, 640), n_frames=10**5)), CLEAR, "n_frames x height x width must be at most"),
+    # was: 215 GB of frames and labels asked for (a MemoryError, or swapping)
     Case("synth-api/render-size-0", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
         [], size=(0, 0), n_frames=2)), CLEAR, "size must be (height, width)"),  # was: OpenCV "inv_scale_x > 0"
     Case("synth-api/render-seed-negative", api(lambda t: __import__("motionbits.synth").synth.render_planar_clip(
@@ -1157,6 +1233,27 @@ CASES: list[Case] = [
          CLEAR, "must end in .mp4"),
     Case("somprompt/write-mp4-fps-huge", api(lambda t: __import__("somprompt").write_mp4(list(_F), t / "v.mp4", fps=1e300)),
          CLEAR, "fps must be"),  # was: OverflowError
+    Case("video/write-h264-empty-keeps-old", api(lambda t: _h264_failed_over(t, [])), CORRECT,
+         check=lambda o, t: o.value == (b"an earlier video", ["v.mp4"])),  # was: the earlier file deleted
+    Case("video/write-h264-mixed-sizes-keeps-old", api(lambda t: _h264_failed_over(
+        t, [_F[0], _F[0][:60]])), CORRECT, check=lambda o, t: o.value == (b"an earlier video", ["v.mp4"])),
+    # was: the earlier file replaced by a half-written video of the first frame
+    Case("video/write-h264-fps-tiny", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        list(_F), t / "v.mp4", fps=1e-6)), CLEAR, "fps must be a number >= 0.001", absent=("v.mp4",)),
+    # was: written at 24 fps (the rate rounded to 0)
+    Case("video/write-h264-fps-float32", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        list(_F), t / "v.mp4", fps=np.float32(5))), CORRECT, check=lambda o, t: (t / "v.mp4").stat().st_size > 0),
+    # was: TypeError "argument should be a string or a Rational instance"
+    Case("video/h264-crf-negative", api(lambda t: __import__("motionbits.video_writer").video_writer.H264Writer(
+        t / "v.mp4", crf=-5)), CLEAR, "crf must be in [0, 51]"),  # was: OverflowError from PyAV on the first frame
+    Case("video/write-h264-frames-none", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        None, t / "v.mp4")), CLEAR, "frames must be an iterable"),  # was: "'NoneType' object is not iterable"
+    Case("video/write-h264-too-wide", api(lambda t: __import__("motionbits.video_writer").video_writer.write_h264(
+        [np.zeros((2, 20000, 3), np.uint8)], t / "v.mp4")), CLEAR, "at most 16384 pixels a side",
+         absent=("v.mp4",)),  # was: av ExternalError "Generic error in an external library"
+    Case("video/write-h264-parent-is-file", api(lambda t: (a_file("f")(t), __import__(
+        "motionbits.video_writer").video_writer.write_h264(list(_F), t / "f" / "v.mp4"))), CLEAR,
+         "is a file, not a folder"),  # was: FileExistsError "[Errno 17] File exists: '.../f'"
     Case("somprompt/write-gif-to-folder", api(lambda t: __import__("somprompt").write_gif(list(_F), t)), CLEAR,
          "is a folder"),  # was: PIL's "unknown file extension: "
     Case("somprompt/write-gif-fps-tiny", api(lambda t: __import__("somprompt").write_gif(list(_F), t / "v.gif", fps=1e-3)),

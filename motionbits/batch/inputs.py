@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import glob
 import hashlib
+import os
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -103,7 +104,12 @@ def expand_inputs(items: list[str], cwd: Path | None = None) -> list[BatchInput]
     Raises:
         FileNotFoundError: an item on the command line does not exist.
         ValueError: an empty item, a glob that matches nothing, or nothing left to process.
+        TypeError: ``items`` is not a list (a str is one input: pass ``[path]``).
     """
+    if isinstance(items, (str, bytes, os.PathLike)) or not isinstance(items, (list, tuple)):
+        # a str was read letter by letter: "/" searched the whole file system
+        raise TypeError(f"items must be a list of inputs, e.g. [{str(items)!r:.40}], got "
+                        f"{type(items).__name__}")
     base = (cwd or Path.cwd()).resolve()
     paths: list[str] = []
     seen = set()

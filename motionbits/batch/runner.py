@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numbers
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,6 +13,7 @@ from tqdm import tqdm
 from motionbits.batch.inputs import BatchInput
 from motionbits.batch.job import clean_partial, remove_partial_dir
 from motionbits.batch.journal import Journal
+from motionbits.frames import whole_number
 
 __all__ = ["BatchReport", "run_batch", "ENGINES", "JOURNAL_NAME"]
 
@@ -90,11 +93,23 @@ def run_batch(items: list[BatchInput], out_dir: str, options: dict | None = None
         address: Ray cluster to join instead of starting one.
         retry_failed: run videos recorded as failed again.
         quiet: no progress bars.
+
+    Raises (before any work):
+        TypeError / ValueError: ``items`` not a list of :class:`BatchInput`, two of them
+            with one path or one name (exact repeats run once), ``out_dir`` empty or a
+            file, ``options`` not a dict of ``segment`` options with usable values, or
+            ``engine`` / ``workers`` out of range.
     """
     if engine not in ENGINES:
         raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")
-    if workers is not None and workers < 1:
+    if workers is not None and whole_number("workers", workers) < 1:
         raise ValueError(f"--workers must be >= 1, got {workers}")
+    items = _check_items(items)
+    if not isinstance(out_dir, (str, os.PathLike)) or not os.fspath(out_dir).strip():
+        raise ValueError(f"out_dir must name the batch folder, got {out_dir!r:.40}")  # "": the current folder
+    if Path(out_dir).exists() and not Path(out_dir).is_dir():
+        raise ValueError(f"out_dir {out_dir} is a file, not a folder")
+    _check_batch_options(options)
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -129,3 +144,59 @@ def run_batch(items: list[BatchInput], out_dir: str, options: dict | None = None
     failed_total = sum(journal.status(it.path) == "failed" for it in items)
     return BatchReport(counts["done"], counts["failed"], len(items) - len(todo), failed_total,
                        cleaned, time.perf_counter() - t0)
+
+
+def _check_items(items: object) -> list[BatchInput]:
+    """``items`` as a list without exact repeats; two videos of one path or of one output
+    name are refused (the second output replaced the first, both recorded as done)."""
+    if isinstance(items, (str, bytes)) or not isinstance(items, (list, tuple)) or not all(
+            isinstance(it, BatchInput) for it in items):
+        raise TypeError(f"items must be a list of BatchInput (see motionbits.batch.expand_inputs), "
+                        f"got {items!r:.60}")
+    unique = list(dict.fromkeys(items))
+    for key in ("path", "name"):
+        seen: dict[str, BatchInput] = {}
+        for it in unique:
+            other = seen.setdefault(getattr(it, key), it)
+            if other is not it:
+                raise ValueError(f"items hold two videos of {key} {getattr(it, key)!r} ({other.path} "
+                                 f"as {other.name!r}, {it.path} as {it.name!r}); each video needs "
+                                 "its own path and output name (expand_inputs gives them)")
+    return unique
+
+
+#: ``segment`` arguments that the batch sets itself, not an option.
+_NOT_OPTIONS = {"input", "out", "overwrite", "quiet", "func", "command", "json", "debug"}
+
+
+def _check_batch_options(options: object) -> None:
+    """Every ``segment`` option check that needs no work, once for the batch (an unknown
+    option was ignored; a bad value, or options that are not a dict, failed every video)."""
+    import argparse
+
+    from motionbits.batch.job import _segment_args
+    from motionbits.commands.segment import _check_options
+
+    if options is None:
+        return
+    if not isinstance(options, dict):
+        raise TypeError(f"options must be a dict of segment options, got {type(options).__name__}")
+    args = _segment_args({}, "input", Path("out"))
+    known = sorted(set(vars(args)) - _NOT_OPTIONS)
+    unknown = sorted(str(k) for k in options if k not in known)
+    if unknown:
+        raise ValueError(f"unknown segment option(s) {', '.join(map(repr, unknown))}; "
+                         f"known: {', '.join(known)}")
+    for key, value in options.items():
+        default = getattr(args, key)
+        if value is None or key in ("config", "flow", "backend", "refine", "sam2"):
+            continue  # None: segment's default; names: checked by the config below
+        if isinstance(default, bool) or key == "strict":
+            if not isinstance(value, bool):
+                raise TypeError(f"option {key!r} must be True or False, got {value!r:.40}")
+        elif key == "fps":
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise TypeError(f"option 'fps' must be a number, got {value!r:.40}")
+        else:
+            whole_number(f"option {key!r}", value)
+    _check_options(argparse.Namespace(**{**vars(args), **options}))

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
 
         import_ray()
     own = {"inputs", "out", "engine", "workers", "address", "retry_failed", "quiet", "func",
-           "command"}
+           "command", "debug"}
     options = {k: v for k, v in vars(args).items() if k not in own}
     # bad option values fail here, once, rather than in every video
     _check_options(args)

@@ -23,7 +23,7 @@ from motionbits.errors import InputError
 from motionbits.outputs import StagedFolder
 from motionbits.segmenter import STAGES, MotionBitsSegmenter
 from motionbits.video import count_frames, is_video_file, iter_frames
-from motionbits.video_writer import MAX_FPS, H264Writer
+from motionbits.video_writer import MAX_FPS, MIN_FPS, H264Writer
 
 #: What ``segment`` writes into ``--out`` (``--overwrite`` replaces only such a folder).
 OUTPUTS = {"labels", "overlay.mp4", "summary.json"}
@@ -107,6 +107,8 @@ def _check_options(args: argparse.Namespace) -> MotionBitsConfig:
         raise InputError(f"--fps must be a positive number, got {args.fps:g}")
     if args.fps > MAX_FPS:  # else an OverflowError traceback from PyAV
         raise InputError(f"--fps must be at most {MAX_FPS}, got {args.fps:g}")
+    if args.fps < MIN_FPS:  # else rounded to 0: an overlay at 24 fps
+        raise InputError(f"--fps must be at least {MIN_FPS}, got {args.fps:g}")
     flags = {k: v for k, v in (("n_nodes", args.nodes), ("max_side", args.max_side),
                                 ("backend", args.backend), ("flow", args.flow),
                                 ("refine", args.refine), ("sam2_path", args.sam2),
@@ -239,6 +241,7 @@ def _segment(args, seg, frames, total, last, out: Path, gt, progress=tqdm) -> di
                                  f"({decoded} frames decoded)")
     except BaseException:
         bar.leave = False  # no stale progress bar above the error message
+        writer.discard()  # its error, not the overlay's, is the one shown
         raise
     finally:
         bar.close()

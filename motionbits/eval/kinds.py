@@ -19,15 +19,20 @@ def body_kinds(scene: str | Path) -> dict[int, str]:
     """Ground-truth id -> kind of body, from a scene's ``meta.json`` (``labels.<id>.kind``).
 
     Returns ``{}`` when the scene has no ``meta.json``, it is not JSON, or it names no
-    kinds (``meta.json`` is free-form; a DAVIS window has none).
+    kinds (``meta.json`` is free-form; a DAVIS window has none). An entry whose id is not
+    a whole number >= 1 is skipped, not the scene's every kind.
     """
     try:
         meta = json.loads((Path(scene) / "meta.json").read_text())
         labels = meta["labels"]
-        return {int(i): str(v["kind"]) for i, v in labels.items()
-                if isinstance(v, dict) and "kind" in v}
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return {}
+        items = labels.items()
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
+        return {}  # RecursionError: brackets nested thousands deep
+    kinds = {}
+    for i, v in items:
+        if isinstance(v, dict) and "kind" in v and str(i).isascii() and str(i).isdecimal() and int(i) >= 1:
+            kinds[int(i)] = str(v["kind"])  # "1.5" failed int() and dropped every kind
+    return kinds
 
 
 def iou_by_kind(per_scene: dict[str, dict], kinds: dict[str, dict[int, str]]

@@ -85,6 +85,11 @@ def run_stacking(methods: list[str], trials: int, seed: int, *, config: TrialCon
 def summarise(results: dict[str, list[TrialResult]]) -> dict:
     """The JSON of the issue: ``{"methods": {NAME: {"success": k, "trials": n,
     "stacked_mean": x, "failures": {REASON: count}}}}`` (plus timing)."""
+    if not isinstance(results, dict) or not all(
+            isinstance(rs, (list, tuple)) and all(isinstance(r, TrialResult) for r in rs)
+            for rs in results.values()):  # None: AttributeError 'items'
+        raise TypeError(f"results must be a dict of method name -> list of TrialResult "
+                        f"(as run_stacking returns), got {results!r:.60}")
     out = {}
     for m, rs in results.items():
         n = len(rs)
@@ -103,6 +108,11 @@ def summarise(results: dict[str, list[TrialResult]]) -> dict:
 def format_table(summary: dict) -> str:
     """Table 3's layout: method, # stacked objects (total over trials, and mean), SR,
     failure reasons."""
+    keys = ("success", "trials", "stacked_mean", "stacked_total", "failures")
+    if not (isinstance(summary, dict) and isinstance(summary.get("methods"), dict) and all(
+            isinstance(s, dict) and all(k in s for k in keys) for s in summary["methods"].values())):
+        raise TypeError(f"summary must be a dict as summarise returns ({{'methods': {{NAME: "
+                        f"{{{', '.join(keys)}}}}}}}), got {summary!r:.60}")  # {}: KeyError 'methods'
     rows = [("Method", "# Stacked Objs", "SR", "Failures")]
     for m, s in summary["methods"].items():
         fails = ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items(),

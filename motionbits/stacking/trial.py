@@ -20,12 +20,14 @@
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from motionbits.frames import whole_number
 from motionbits.stacking.perception import (
     HeightMap,
     WorldGrasp,
@@ -64,6 +66,35 @@ class TrialConfig:
     finger_margin: float = 0.012  # m between an open finger and the object's extent
     carry_clearance: float = 0.06  # m above the tower top while carrying
     settle_s: float = 0.6  # s the scene settles after each placement
+
+    def __post_init__(self) -> None:
+        """Every field checked when built (``width=0`` or ``frame_dt=0`` were accepted and
+        failed inside MuJoCo or as a division by zero minutes later)."""
+        for name in ("width", "height"):
+            v = whole_number(name, getattr(self, name))
+            if not 32 <= v <= 16384:
+                raise ValueError(f"{name} must be in [32, 16384] pixels, got {v}")
+        if whole_number("min_mask_px", self.min_mask_px) < 0:
+            raise ValueError(f"min_mask_px must be >= 0, got {self.min_mask_px}")
+        for name in ("frame_dt", "push_speed", "transit_speed"):
+            if _number(name, getattr(self, name)) <= 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        for name in ("min_object_height", "finger_depth", "finger_margin", "carry_clearance", "settle_s"):
+            if _number(name, getattr(self, name)) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        d = self.push_dist
+        if (isinstance(d, (str, bytes)) or not isinstance(d, (tuple, list)) or len(d) != 2
+                or not 0 <= _number("push_dist", d[0]) <= _number("push_dist", d[1])):
+            raise ValueError(f"push_dist must be (low, high) metres with 0 <= low <= high, got {d!r:.40}")
+
+
+def _number(name: str, value: object) -> float:
+    """``value`` as a float if it is a finite real number; else an error naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__} {value!r:.40}")
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return float(value)
 
 
 @dataclass

@@ -22,6 +22,8 @@ from motionbits.frames import whole_number
 __all__ = ["Polygon", "Body", "PlanarClip", "render_planar_clip", "demo_clip", "smooth_texture"]
 
 _SUPERSAMPLE = 2  # render at 2x and downsample: anti-aliased edges like a real camera
+MAX_FRAME_PIXELS = 4096 * 4096  # H x W of one frame (rendered at 2x: ~2 GB of body layers)
+MAX_CLIP_PIXELS = 2 ** 28  # n_frames x H x W (frames and labels: 7 bytes a pixel, ~1.9 GB)
 
 
 def _finite(name: str, value: Any) -> float:
@@ -36,11 +38,16 @@ def _finite(name: str, value: Any) -> float:
 
 def _check_size(size: Any) -> tuple[int, int]:
     """``size`` as (H, W), two whole numbers >= 1 (else OpenCV's "inv_scale_x > 0", numpy's
-    "negative dimensions are not allowed", or an IndexError)."""
+    "negative dimensions are not allowed", or an IndexError) of at most ``MAX_FRAME_PIXELS``
+    pixels (else a MemoryError, or minutes of swapping)."""
     if (isinstance(size, (str, bytes)) or not isinstance(size, Sequence) or len(size) != 2
             or any(whole_number("size", v) < 1 for v in size)):
         raise ValueError(f"size must be (height, width), two whole numbers >= 1, got {size!r:.40}")
-    return int(size[0]), int(size[1])
+    h, w = int(size[0]), int(size[1])
+    if h * w > MAX_FRAME_PIXELS:
+        raise ValueError(f"size must be at most {MAX_FRAME_PIXELS:,} pixels (4096 x 4096) a frame, "
+                         f"got {h} x {w}")
+    return h, w
 
 
 @dataclass(frozen=True)
@@ -192,7 +199,8 @@ def render_planar_clip(bodies: list[Body] | tuple[Body, ...], *, size: tuple[int
 
     Raises:
         TypeError / ValueError: ``bodies`` is not a sequence of :class:`Body`, ``size`` not
-            two whole numbers >= 1, ``n_frames`` not a whole number >= 1, ``seed`` not a
+            two whole numbers >= 1 (at most ``MAX_FRAME_PIXELS`` pixels, and
+            ``n_frames`` x H x W at most ``MAX_CLIP_PIXELS``), ``n_frames`` not a whole number >= 1, ``seed`` not a
             whole number >= 0, or ``noise`` not a finite number >= 0.
     """
     if whole_number("n_frames", n_frames) < 1:
@@ -203,6 +211,9 @@ def render_planar_clip(bodies: list[Body] | tuple[Body, ...], *, size: tuple[int
         raise ValueError(f"seed must be >= 0, got {seed}")
     if _finite("noise", noise) < 0:  # NaN and inf noise gave black / saturated frames
         raise ValueError(f"noise must be >= 0, got {noise}")
+    if n_frames * h * w > MAX_CLIP_PIXELS:  # else a MemoryError (or swapping) part-way
+        raise ValueError(f"n_frames x height x width must be at most {MAX_CLIP_PIXELS:,} pixels "
+                         f"(~1.9 GB of frames and labels), got {n_frames} x {h} x {w}")
     if (isinstance(bodies, (str, bytes)) or not isinstance(bodies, Sequence)
             or not all(isinstance(b, Body) for b in bodies)):  # a Polygon: AttributeError
         raise TypeError(f"bodies must be a list of Body, got {bodies!r:.60}")
