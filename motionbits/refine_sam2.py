@@ -34,6 +34,8 @@ torch and transformers are imported when a `Sam2Refiner` is loaded, never at imp
 from __future__ import annotations
 
 import dataclasses
+import math
+import numbers
 import os
 import time
 from dataclasses import dataclass
@@ -43,6 +45,8 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from motionbits.frames import whole_number
+from motionbits.objects import check_label_map
 from motionbits.torch_threads import check_threads, torch_threads
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -80,10 +84,38 @@ class Sam2Prompt:
     point_labels: np.ndarray
 
 
+def _count(name: str, value: Any, low: int) -> int:
+    """``value`` as an int >= ``low`` (2.5 was read as 2 points, -1 and 0 as none or as 1)."""
+    n = whole_number(name, value)
+    if n < low:
+        raise ValueError(f"{name} must be >= {low}, got {value!r}")
+    return n
+
+
+def _fraction(name: str, value: Any) -> float:
+    """``value`` as a float in [0, 1] (a NaN ``min_iou`` accepted every refined mask)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value <= 1:
+        raise ValueError(f"{name} must be a number in [0, 1], got {value!r:.40}")
+    return float(value)
+
+
+def _check_mask(name: str, mask: Any, shape: tuple[int, ...], of: str = "the label map") -> None:
+    """``mask`` an (H, W) bool array of ``shape`` (a float mask failed in numpy's bitwise_and,
+    a NaN one in int(), one of another size in broadcasting)."""
+    if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_:
+        raise TypeError(f"{name} must be an (H, W) bool numpy array, got "
+                        f"{type(mask).__name__}{'' if not isinstance(mask, np.ndarray) else ' of ' + str(mask.dtype)}")
+    if mask.shape != tuple(shape):
+        raise ValueError(f"{name} has shape {mask.shape} but {of} is {tuple(shape)}; masks must have its (H, W)")
+
+
 def node_centres(shape: tuple[int, int], rows: int, cols: int) -> np.ndarray:
     """(rows * cols, 2) float32 (x, y) of the grid nodes in an image of `shape` (H, W),
     row-major: the cell centres of the segmenter's node grid, scaled to that image."""
-    h, w = shape
+    if not isinstance(shape, (tuple, list)) or len(shape) != 2:  # else "too many values to unpack"
+        raise ValueError(f"shape must be the image's (H, W), got {shape!r:.40}")
+    h, w = (_count("shape", v, 1) for v in shape)
+    rows, cols = _count("rows", rows, 1), _count("cols", cols, 1)  # 0: ZeroDivisionError
     gx, gy = np.meshgrid((np.arange(cols) + 0.5) * (w / cols), (np.arange(rows) + 0.5) * (h / rows))
     return np.stack([gx.ravel(), gy.ravel()], axis=1).astype(np.float32)
 
@@ -122,6 +154,17 @@ def build_prompts(labels: np.ndarray, node_labels: np.ndarray, ids: list[int] | 
         (nearest the centroid among ties).
         Negative points are nodes in the `ring` around k's nodes whose pixel label is not k.
     """
+    labels = check_label_map(labels, name="labels")  # float: "cannot be interpreted as an integer"
+    node_labels = check_label_map(node_labels, name="node_labels")
+    if node_labels.size == 0:  # else ZeroDivisionError
+        raise ValueError(f"node_labels must be the (rows, cols) node grid, got shape {node_labels.shape}")
+    if ids is not None:
+        if isinstance(ids, (str, bytes)) or not hasattr(ids, "__iter__"):
+            raise TypeError(f"ids must be a list of MotionBit ids or None, got {type(ids).__name__} {ids!r:.40}")
+        ids = [_count("ids", k, 1) for k in ids]  # 3.5: "list indices must be integers", -2: a prompt of id -2
+    n_positive = _count("n_positive", n_positive, 1)
+    n_negative = _count("n_negative", n_negative, 0)
+    ring = _count("ring", ring, 1)
     rows, cols = node_labels.shape
     h, w = labels.shape
     xy = node_centres((h, w), rows, cols)
@@ -179,10 +222,19 @@ def judge_refinement(refined: np.ndarray, motion: np.ndarray, static: np.ndarray
         band_px: growth within this distance (px) of the motion mask counts as boundary.
         min_iou, max_outside: see ``MotionBitsConfig.refine_min_iou`` / ``refine_max_outside``.
     """
+    if not isinstance(motion, np.ndarray) or motion.ndim != 2:
+        raise ValueError(f"motion must be an (H, W) bool mask, got shape {np.shape(motion)}")
+    _check_mask("motion", motion, motion.shape)
+    _check_mask("refined", refined, motion.shape, "motion")
+    _check_mask("static", static, motion.shape, "motion")
+    if isinstance(band_px, bool) or not isinstance(band_px, numbers.Real) or not band_px >= 0:
+        raise ValueError(f"band_px must be a number >= 0, got {band_px!r:.40}")  # NaN, inf: int() failed
+    min_iou, max_outside = _fraction("min_iou", min_iou), _fraction("max_outside", max_outside)
     area = int(refined.sum())
     if area == 0:
         return "empty"
-    r = max(1, int(np.ceil(band_px)))
+    # a band beyond the image's diagonal covers it all, as the diagonal does (1e6 px: a 4 TB kernel)
+    r = max(1, int(np.ceil(min(band_px, math.hypot(*motion.shape)))))
     near = cv2.dilate(motion.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1,) * 2))
     outside = int((refined & static & ~near.astype(bool)).sum())
     if outside > max_outside * area:
@@ -199,6 +251,14 @@ def merge_refinements(labels: np.ndarray, accepted: dict[int, np.ndarray]) -> np
     Pixels of k outside its refined mask become background; the refined mask claims
     background pixels (first come, in ascending id) and never another MotionBit's pixels.
     """
+    labels = check_label_map(labels, name="labels")
+    if not isinstance(accepted, dict):  # None: "not iterable"; a list: "only integer scalar arrays"
+        raise TypeError(f"accepted must be a dict of MotionBit id -> (H, W) bool mask, got {type(accepted).__name__}")
+    for k, mask in accepted.items():
+        _count("accepted's ids", k, 1)
+        _check_mask(f"accepted[{k!r}]", mask, labels.shape)
+    if labels.size and labels.max() > np.iinfo(np.int32).max:  # else wrapped in the int32 result
+        raise ValueError(f"labels holds ids beyond int32 (max {labels.max()}); the refined map is int32")
     out = labels.astype(np.int32, copy=True)
     for k in sorted(accepted):
         mask, own = accepted[k], labels == k
@@ -233,8 +293,8 @@ class Sam2Refiner:
         self.threads = check_threads(threads, "SAM2")
         self.model = model
         self.processor = processor
-        self.min_iou = float(min_iou)
-        self.max_outside = float(max_outside)
+        self.min_iou = _fraction("min_iou", min_iou)  # NaN accepted every refined mask
+        self.max_outside = _fraction("max_outside", max_outside)
         self.totals: dict[str, Any] = {"frames": 0, "prompted": 0, "accepted": 0,
                                        "rejected": dict.fromkeys(REJECT_REASONS, 0)}
         self.last_stats: dict[str, Any] = {}

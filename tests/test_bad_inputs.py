@@ -1001,6 +1001,21 @@ CASES: list[Case] = [
          CLEAR, "results must be a dict"),  # was: AttributeError "'NoneType' object has no attribute 'items'"
     Case("stacking-api/format-table-empty", api(lambda t: __import__("motionbits.stacking").stacking.format_table({})),
          CLEAR, "summary must be a dict as summarise returns"),  # was: KeyError 'methods'
+    Case("stacking-api/format-table-unknown-failure", api(lambda t: __import__("motionbits.stacking").stacking.format_table(
+        {"methods": {"gt": {"success": 0, "trials": 1, "stacked_mean": 0.0, "stacked_total": 0,
+                            "failures": {"timeout": 1}}}})), CLEAR,
+         "['failures'] must map failure reasons (grasp, stack, masks)"),  # was: ValueError "'timeout' is not in tuple"
+    Case("refine/build-prompts-float-labels", api(lambda t: __import__("motionbits.refine_sam2").refine_sam2.build_prompts(
+        _LAB.astype(float), np.zeros((4, 4), int))), CLEAR,
+         "labels must have an integer dtype"),  # was: TypeError "'numpy.float64' object cannot be interpreted as an integer"
+    Case("refine/node-centres-rows-0", api(lambda t: __import__("motionbits.refine_sam2").refine_sam2.node_centres(
+        (20, 20), 0, 4)), CLEAR, "rows must be >= 1"),  # was: ZeroDivisionError
+    Case("refine/judge-float-mask", api(lambda t: __import__("motionbits.refine_sam2").refine_sam2.judge_refinement(
+        (_LAB == 3).astype(float), _LAB == 3, _LAB == 0, 2.0, min_iou=0.5, max_outside=0.1)), CLEAR,
+         "refined must be an (H, W) bool"),  # was: TypeError "ufunc 'bitwise_and' not supported for the input types"
+    Case("refine/refiner-min-iou-nan", api(lambda t: __import__("motionbits.refine_sam2").refine_sam2.Sam2Refiner(
+        None, None, min_iou=float("nan"))), CLEAR, "min_iou must be a number in [0, 1]"),
+    # was: accepted (NaN compares false: every refined mask accepted)
     Case("api/config-n_nodes-str", api(lambda t: _config(n_nodes="10000")), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-bool", api(lambda t: _config(n_nodes=True)), CLEAR, "n_nodes"),
     Case("api/config-n_nodes-float", api(lambda t: _config(n_nodes=100.5)), CLEAR, "n_nodes"),

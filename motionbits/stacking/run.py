@@ -113,6 +113,11 @@ def format_table(summary: dict) -> str:
             isinstance(s, dict) and all(k in s for k in keys) for s in summary["methods"].values())):
         raise TypeError(f"summary must be a dict as summarise returns ({{'methods': {{NAME: "
                         f"{{{', '.join(keys)}}}}}}}), got {summary!r:.60}")  # {}: KeyError 'methods'
+    for m, s in summary["methods"].items():  # else ValueError "'timeout' is not in tuple" from FAILURES.index
+        fails = s["failures"]
+        if not isinstance(fails, dict) or not all(k in FAILURES for k in fails):
+            raise ValueError(f"summary['methods'][{m!r}]['failures'] must map failure reasons "
+                             f"({', '.join(FAILURES)}) to counts, got {fails!r:.60}")
     rows = [("Method", "# Stacked Objs", "SR", "Failures")]
     for m, s in summary["methods"].items():
         fails = ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items(),
