@@ -26,7 +26,7 @@ from motionbits.frames import whole_number
 from .anchors import LabelPlacement, place_labels
 from .colors import Color, ColorPalette, contrasting_color
 from .inputs import ImageLike, as_rgb_array, like_input
-from .registry import MarkRegistry
+from .registry import MarkRegistry, check_registry
 from .regions import LabelRegions, as_regions
 
 __all__ = [
@@ -49,6 +49,7 @@ def _prepare(
         registry = MarkRegistry()
         registry.register(regions.ids)
     else:
+        check_registry(registry)  # else "argument of type 'int' is not iterable"
         missing = [i for i in regions.ids if i not in registry]
         if missing:
             registry.register(missing)
@@ -81,6 +82,9 @@ def auto_text_scale(shape: tuple[int, int]) -> float:
 
 class _Annotator:
     def __init__(self, palette: ColorPalette | None = None) -> None:
+        if palette is not None and not isinstance(palette, ColorPalette):  # else AttributeError 'by_number' when drawing
+            raise TypeError(f"palette must be a somprompt.ColorPalette or None (ColorPalette(['#rrggbb', ...])), "
+                            f"got {type(palette).__name__} {palette!r:.40}")
         self.palette = palette if palette is not None else ColorPalette.default()
 
     def color(self, registry: MarkRegistry, obj_id: int) -> Color:

@@ -342,6 +342,7 @@ _LINE = re.compile(
 _ARTICLE = re.compile(r"^(?:the|a|an|one|two|three|some|this|that|these|those)\s+", re.I)
 _NONE_NAMES = {"none", "nothing", "no object", "no objects", "n/a", "na", "null"}
 _MAX_NAME_WORDS = 6
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")  # NUL, ESC, ...: not part of a name (read as spaces)
 
 
 def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedObject]:
@@ -377,7 +378,7 @@ def parse_named_objects(answer: str, style: MarkStyle = "number") -> list[NamedO
         marks = tuple(t for t, _, _ in find_citations(head, style))
         name = re.sub(rf"{_OPEN}[^\]\uff3d\u3011\u3015]*{_CLOSE}|{_ROPEN}[^)\uff09]*{_RCLOSE}"
                       rf"|{_OPEN}|{_CLOSE}|{_ROPEN}|{_RCLOSE}|[*_`\"']", " ", head)
-        name = _ARTICLE.sub("", " ".join(name.split()).strip(" .,;:-").lower())
+        name = _ARTICLE.sub("", " ".join(_CONTROL.sub(" ", name).split()).strip(" .,;:-").lower())
         if not name or name in _NONE_NAMES or len(name.split()) > _MAX_NAME_WORDS or name in seen:
             continue
         seen.add(name)

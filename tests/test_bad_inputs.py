@@ -1355,6 +1355,23 @@ CASES: list[Case] = [
          "responses must be"),  # was: "'NoneType' object is not iterable"
     Case("vlm/noun-phrases-none", api(lambda t: __import__("vlm_adapters").extract_noun_phrases(None)), CLEAR,
          "text must be a str"),  # was: "expected string or bytes-like object, got 'NoneType'"
+    Case("vlm/phrases-control-characters", api(lambda t: _phrases("- red\x00cup: moved\n- blue\x1bbox: slid")), CORRECT,
+         check=lambda o, t: o.value == ["red cup", "blue box"]),  # was: ['red\x00cup', 'blue\x1bbox'] sent to the detector
+    Case("vlm/noun-phrases-non-ascii", api(lambda t: __import__("vlm_adapters").extract_noun_phrases(
+        "The café cup moved and the Bécher fell.")), CORRECT,
+         check=lambda o, t: o.value == ["café cup", "bécher"]),  # was: ['caf cup', 'b cher'] (letters beyond ASCII dropped)
+    Case("vlm/noun-phrases-max-words-none", api(lambda t: __import__("vlm_adapters").extract_noun_phrases(
+        "the red cup", max_words=None)), CLEAR, "max_words must be a whole number"),
+    # was: TypeError "'<' not supported between instances of 'int' and 'NoneType'" (0 and -1: no phrase)
+    Case("vlm/grounder-parse-returns-str", api(lambda t: __import__("vlm_adapters").TextGrounder(
+        _NoDetector(), parse=lambda text: "cup").phrases("- a cup: moved")), CLEAR,
+         "parse must return a list of str phrases"),  # was: ['c', 'u', 'p'] (a None or 3 in the list reached the detector)
+    Case("somprompt/annotate-registry-int", api(lambda t: __import__("somprompt").MaskAnnotator().annotate(
+        np.zeros((20, 20, 3), np.uint8), _LAB, 5)), CLEAR,
+         "registry must be a somprompt.MarkRegistry"),  # was: "argument of type 'int' is not iterable"
+    Case("somprompt/annotator-palette-int", api(lambda t: __import__("somprompt").MaskAnnotator(palette=5).annotate(
+        np.zeros((20, 20, 3), np.uint8), _LAB)), CLEAR,
+         "palette must be a somprompt.ColorPalette"),  # was: AttributeError "'int' object has no attribute 'by_number'"
     Case("vlm/checkpoint-none", api(lambda t: __import__("vlm_adapters").Qwen2_5_VLAdapter.from_pretrained(None)),
          CLEAR, "checkpoint folder"),  # was: "expected str, bytes or os.PathLike object, not NoneType"
     Case("vlm/checkpoint-empty", api(lambda t: __import__("vlm_adapters").Qwen2_5_VLAdapter.from_pretrained("")),

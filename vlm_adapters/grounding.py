@@ -378,8 +378,21 @@ class TextGrounder:
         self.max_instances = max_instances
 
     def phrases(self, text: str) -> list[str]:
-        """The detector prompts found in `text`."""
-        return list(self.parse(text))
+        """The detector prompts found in `text`: ``parse``'s phrases, stripped, without
+        empty ones and repeats.
+
+        Raises:
+            TypeError: ``parse`` returned something else than a list of str (a str was read
+                letter by letter, None failed with "'NoneType' object is not iterable", a
+                None or 3 in the list reached the detector).
+        """
+        found = self.parse(text)
+        if isinstance(found, (str, bytes, dict)) or not hasattr(found, "__iter__"):
+            raise TypeError(f"parse must return a list of str phrases, got {type(found).__name__} {found!r:.60}")
+        found = list(found)
+        if not all(isinstance(p, str) for p in found):
+            raise TypeError(f"parse must return a list of str phrases, got {found!r:.60}")
+        return list(dict.fromkeys(p.strip() for p in found if p.strip()))
 
     def detect(self, text: str, image: Frame) -> Detections:
         """Instances of the objects named in `text`, found in `image`."""

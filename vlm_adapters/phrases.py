@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 
+from motionbits.frames import whole_number
 from somprompt import load_prompt, parse_named_objects, repair_text
 
 __all__ = [
@@ -75,10 +76,12 @@ def extract_noun_phrases(text: str, max_words: int = 3) -> list[str]:
     """
     if not isinstance(text, str):  # else re's "expected string or bytes-like object"
         raise TypeError(f"text must be a str, got {type(text).__name__}; the VLM produced no answer")
+    if whole_number("max_words", max_words) < 1:  # else 0 and -1 found nothing, None a TypeError of '<'
+        raise ValueError(f"max_words must be >= 1, got {max_words!r}")
     phrases: list[str] = []
     seen: set[str] = set()
     for clause in re.split(r"[.,;:!?()\n\[\]]+", text):
-        words = re.findall(r"[A-Za-z][A-Za-z'-]*", clause)
+        words = re.findall(r"[^\W\d_](?:[^\W\d_]|['-])*", clause)  # letters of any script ("café", not "caf")
         i = 0
         while i < len(words):
             if words[i].lower() in {"the", "a", "an", "one", "two", "three", "its", "their"}:
