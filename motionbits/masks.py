@@ -21,7 +21,7 @@ from motionbits.twists import kabsch_2d, rigid_matrix
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "drop_labels",
            "hide_small", "hide_edgeless", "outline_gradient", "snap_to_edges",
            "trim_flat_background", "SPECK_CELLS", "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT",
-           "HALO_MASK_SHARE"]
+           "HALO_MASK_SHARE", "hide_thin", "THIN_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -32,6 +32,9 @@ REFITS = 2
 PHOTO_WINDOW = 3
 #: A detached piece of a label smaller than this many grid cells is a speck.
 SPECK_CELLS = 2
+#: A mark of which an opening by a square of one grid cell (rounded up) keeps less than
+#: this share is stripes, not a body (:func:`hide_thin`).
+THIN_SHARE = 0.25
 #: grey levels per px (Sobel, 5x5 mean; :func:`motionbits.evidence.gradient_magnitude`): a
 #: mask whose outline shows less image gradient than this over all but
 #: ``1 - OUTLINE_QUANTILE`` of it, within ``OUTLINE_BAND`` px, is edgeless ...
@@ -280,6 +283,32 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
     area = label_areas(label_map)
     small = np.flatnonzero(area[1:] < min_area) + 1
     return drop_labels(label_map, small[area[small] > 0])
+
+
+def hide_thin(label_map: np.ndarray, side: int) -> np.ndarray:
+    """Zero every label of which an opening by a ``side`` x ``side`` square keeps less than
+    ``THIN_SHARE`` of its pixels: stripes, not a body (the flow along a wood grain's lines
+    or a shadow's edge under a moving camera).
+
+    Args:
+        label_map: (H, W) int32 labels (0 = background).
+        side: px, the square's side (one grid cell).
+
+    Returns:
+        (H, W) int32 label map (``label_map`` itself if nothing is hidden).
+    """
+    square = np.ones((side, side), np.uint8)
+    boxes = label_boxes(label_map)
+    thin = []
+    for i, box in enumerate(boxes, start=1):
+        if box is None:
+            continue
+        mark = (label_map[box] == i).view(np.uint8)
+        kept = cv2.countNonZero(cv2.morphologyEx(mark, cv2.MORPH_OPEN, square,
+                                                 borderType=cv2.BORDER_CONSTANT, borderValue=0))
+        if kept < THIN_SHARE * cv2.countNonZero(mark):
+            thin.append(i)
+    return drop_labels(label_map, thin)
 
 
 def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,

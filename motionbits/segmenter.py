@@ -37,7 +37,7 @@ from motionbits.graph import (
 )
 from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, drop_labels, fit_cluster_motions,
-                              hide_edgeless, hide_small, remove_specks, snap_to_edges,
+                              hide_edgeless, hide_small, hide_thin, remove_specks, snap_to_edges,
                               trim_flat_background)
 from motionbits.merging import (MIN_MOVED, MotionBitGroups, drop_seen_still, observe_touching,
                                 seen_still, standing_still)
@@ -552,6 +552,8 @@ class MotionBitsSegmenter:
             if calm is not None:
                 shown = drop_labels(shown, self._first_look.as_first_seen(shown, cur))
                 shown = drop_labels(shown, self._first_look.uncovered(shown, cur, still_marks))
+            # stripes are not a body (the flow along a wood grain's lines)
+            shown = hide_thin(shown, int(np.ceil(max(grid.cell))))
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
         result.timings = dict(self._timings)

@@ -8,7 +8,7 @@ import pytest
 import motionbits.segmenter as segmenter_module
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
-from motionbits.masks import hide_small
+from motionbits.masks import hide_small, hide_thin
 from motionbits.merging import (OUTWEIGH, MotionBitGroups, drop_seen_still, observe_touching,
                                 seen_still, standing_still, touching_pairs)
 from motionbits.nodes import NodeGrid
@@ -392,6 +392,23 @@ def test_hide_small_zeroes_whole_labels_under_the_area():
     out = hide_small(labels, 10)
     assert set(np.unique(out)) == {0, 3} and (out[labels == 3] == 3).all()
     assert hide_small(labels, 9) is labels  # nothing under 9 px: unchanged
+
+
+def test_hide_thin_zeroes_stripes_and_keeps_bodies():
+    """Marks along a wood grain's lines (3 px stripes) are not shown; a solid block, a
+    block with a stripe of its own, and a 7 px wide rod pushed across the table are."""
+    labels = np.zeros((120, 160), np.int32)
+    labels[10:40, 10:40] = 2  # a block
+    labels[38:42, 40:90] = 2  # ... and a stripe of the grain beside it
+    for y in range(60, 100, 8):
+        labels[y:y + 3, 10:70] = 5  # stripes of one mark
+    labels[60:67, 90:150] = 6  # a rod, 7 px wide
+    out = hide_thin(labels, 7)
+    assert set(np.unique(out)) == {0, 2, 6}
+    assert (out[labels != 5] == labels[labels != 5]).all()
+    solid = np.where(labels == 5, 0, labels)
+    assert hide_thin(solid, 7) is solid  # nothing hidden: unchanged
+    assert set(np.unique(hide_thin(labels, 8))) == {0, 2}  # the rod is thinner than 8 px
 
 
 def test_a_motionbit_trimmed_below_the_minimum_is_not_shown(monkeypatch):
