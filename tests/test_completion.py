@@ -26,6 +26,15 @@ def _scene() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rgb, body, labels
 
 
+def _first_look(rgb: np.ndarray, unseen: tuple[slice, slice]) -> FirstLook:
+    """The (240, 320, 3) ``rgb`` first seen everywhere but in the box ``unseen``."""
+    first = FirstLook((240, 320), covered=20.0)
+    known = np.ones((240, 320), bool)
+    known[unseen] = False
+    first.update(rgb, known, np.zeros((240, 320), np.int32))
+    return first
+
+
 def test_a_partial_mask_takes_the_rest_of_its_body_and_none_of_the_table():
     rgb, body, labels = _scene()
     out = complete_masks(labels, rgb)
@@ -198,10 +207,7 @@ def test_a_mark_that_stands_as_first_seen_is_found_and_a_moved_body_is_not():
     first_rgb = table.copy()
     first_rgb[40:100, 40:100] = (30, 30, 160)  # a static block
     first_rgb[140:200, 60:120] = (200, 200, 40)  # a block about to be kicked 20 px right
-    first = FirstLook((240, 320), covered=20.0)
-    known = np.ones((240, 320), bool)
-    known[140:200, 220:300] = False  # first seen under a hand, say
-    first.update(first_rgb, known, np.zeros((240, 320), np.int32))
+    first = _first_look(first_rgb, np.s_[140:200, 220:300])  # that part under a hand, say
     now = table.copy()
     now[40:100, 40:100] = (30, 30, 160)
     now[140:200, 80:140] = (200, 200, 40)
@@ -229,10 +235,7 @@ def test_a_mark_left_on_the_table_a_block_was_lifted_from_is_found_uncovered():
     first_rgb = table.copy()
     first_rgb[40:100, 40:100] = (230, 230, 230)  # a white block, lifted away later
     first_rgb[140:200, 60:120] = (40, 40, 200)  # a blue block, pushed 10 px right
-    first = FirstLook((240, 320), covered=20.0)
-    known = np.ones((240, 320), bool)
-    known[20:60, 230:290] = False  # first seen under a hand, say
-    first.update(first_rgb, known, np.zeros((240, 320), np.int32))
+    first = _first_look(first_rgb, np.s_[20:60, 230:290])  # that part under a hand, say
     now = table.copy()
     now[140:200, 70:130] = (40, 40, 200)
     tint = table[150:190, 200:260].mean(axis=(0, 1))
