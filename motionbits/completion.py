@@ -98,9 +98,10 @@ FIRST_SEEN_KNOWN = 0.5
 FIRST_SEEN_CHANGED = 0.05
 #: A mark shows the surface around it where a body was first seen when the first look
 #: there lies this many times as far from the surroundings' mean colour as the mark does
-#: now (:meth:`FirstLook.uncovered`). Measured on the marks it found at the last frame
-#: of 140 pick-and-place scenes: 2.8-9.4 for the table a body left, 1.8 and 2.0 for the
-#: marks of two bodies nudged 1.7 cm that cover the table beside them too.
+#: now (:meth:`FirstLook.uncovered`). Read off eight marks found at the last frame of
+#: generated pick-and-place scenes by the test without it: 2.8-9.4 for the table a body
+#: left, 1.8 and 2.0 for the marks of two bodies nudged 1.7 cm that cover the table
+#: beside them too (README "Marks left where a body was are not shown").
 UNCOVERED_CONTRAST = 2.5
 #: A mark found uncovered (:meth:`FirstLook.uncovered`) stays found while it overlaps the
 #: mark found at the last frame by this intersection over union.
