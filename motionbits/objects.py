@@ -152,6 +152,30 @@ class Instance:
         return replace(self, rle=encode_rle(self.get_mask()), mask=None)
 
 
+def check_mask(mask: Any, *, ndim: int = 2, name: str = "mask") -> np.ndarray:
+    """``mask`` as a bool array of ``ndim`` dimensions ((H, W), or (K, H, W) for 3): bool, or
+    numbers where non-zero is the object.
+
+    Raises:
+        TypeError: not numbers (None, str, object arrays: "int() argument must be ...").
+        ValueError: another number of dimensions, or NaN / infinity (NaN is non-zero and
+            was read as "object" everywhere; cast to uint8 it was background).
+    """
+    try:
+        m = np.asarray(mask)
+    except ValueError:  # ragged nested lists
+        raise ValueError(f"{name} must be a rectangular array, got ragged {type(mask).__name__}") from None
+    if m.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be a bool or numeric array (non-zero = object), got "
+                        f"{type(mask).__name__}" + (f" of {m.dtype}" if isinstance(mask, np.ndarray) else ""))
+    if m.ndim != ndim:
+        raise ValueError(f"{name} must be {'(K, H, W)' if ndim == 3 else '(H, W)'}, got shape {m.shape}")
+    if m.dtype.kind == "f" and not np.isfinite(m).all():
+        raise ValueError(f"{name} holds NaN or infinite values; a mask is bool, or 0 (background) "
+                         "and non-zero (object)")
+    return m if m.dtype == np.bool_ else m != 0
+
+
 def check_label_map(
     labels: np.ndarray,
     shape: tuple[int, int] | None = None,

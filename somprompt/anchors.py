@@ -29,6 +29,9 @@ from typing import Mapping
 import cv2
 import numpy as np
 
+from motionbits.frames import whole_number
+from motionbits.objects import check_mask
+
 from .regions import LabelRegions, Region
 
 __all__ = ["distance_to_edge", "mask_anchor", "LabelPlacement", "place_labels"]
@@ -41,15 +44,15 @@ def distance_to_edge(mask: np.ndarray) -> np.ndarray:
     touches the border gets its anchor away from it.
 
     Args:
-        mask: (H, W) bool or 0/1 array.
+        mask: (H, W) bool, or numbers where non-zero is the object (NaN is an error).
 
     Returns:
         (H, W) float32; 0 outside the mask, >= 1 inside.
     """
-    mask = np.asarray(mask)
-    if mask.ndim != 2:  # else OpenCV's "src.type() == CV_8UC1" (3-D) or an empty result (1-D)
-        raise ValueError(f"mask must be (H, W), got shape {mask.shape}")
-    m = np.pad(mask.astype(np.uint8) > 0, 1).astype(np.uint8)
+    # else OpenCV's "src.type() == CV_8UC1" (3-D) or an empty result (1-D); NaN, 0.5 and 256
+    # were cast to uint8 0 (outside) while mask_anchor read them as inside
+    mask = check_mask(mask)
+    m = np.pad(mask, 1).astype(np.uint8)
     dt = cv2.distanceTransform(m, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     return dt[1:-1, 1:-1]
 
@@ -68,7 +71,7 @@ def mask_anchor(mask: np.ndarray) -> tuple[int, int]:
     """The point of a mask farthest from its edge: where its number goes.
 
     Args:
-        mask: (H, W) bool mask with at least one True pixel.
+        mask: (H, W) bool mask with at least one True pixel (or numbers, non-zero = object).
 
     Returns:
         ``(x, y)`` pixel coordinates; ``mask[y, x]`` is always True.
@@ -79,9 +82,7 @@ def mask_anchor(mask: np.ndarray) -> tuple[int, int]:
         >>> x, y = mask_anchor(ring); bool(ring[y, x])
         True
     """
-    mask = np.asarray(mask)
-    if mask.ndim != 2:
-        raise ValueError(f"mask must be (H, W), got shape {mask.shape}")
+    mask = check_mask(mask)  # NaN was read as inside
     if not mask.any():
         raise ValueError("mask is empty: an anchor needs at least one pixel")
     r, c = _best_pixel(distance_to_edge(mask))

@@ -1433,6 +1433,16 @@ CASES: list[Case] = [
          CLEAR, "must be three numbers in [0, 255]"),  # was: 0.31 (documented in [0, 1], for a colour that is none)
     Case("somprompt/distance-to-edge-3d", api(lambda t: __import__("somprompt").distance_to_edge(np.ones((4, 4, 3)))),
          CLEAR, "mask must be (H, W)"),  # was: OpenCV "src.type() == CV_8UC1" (1-D: an empty array)
+    Case("somprompt/mask-anchor-nan", api(lambda t: __import__("somprompt").mask_anchor(
+        np.where(np.eye(5) > 0, 1.0, np.nan))), CLEAR, "mask holds NaN"),  # was: NaN read as inside, (2, 2)
+    Case("somprompt/distance-to-edge-nan", api(lambda t: __import__("somprompt").distance_to_edge(
+        np.full((4, 4), np.nan))), CLEAR, "mask holds NaN"),  # was: all 0 (cast to uint8 0) and a RuntimeWarning
+    Case("somprompt/distance-to-edge-256", api(lambda t: __import__("somprompt").distance_to_edge(
+        np.full((3, 3), 256))), CORRECT, check=lambda o, t: o.value[1, 1] == 2 and o.value.min() == 1),
+    # was: all 0 (256 cast to uint8 is 0: "outside"), while mask_anchor read it as inside
+    Case("somprompt/mask-anchor-object-array", api(lambda t: __import__("somprompt").mask_anchor(
+        np.array([[None, 1]]))), CLEAR, "mask must be a bool or numeric array"),
+    # was: "int() argument must be a string, a bytes-like object or a real number, not 'NoneType'"
     Case("somprompt/draw-registry-int", api(lambda t: __import__("somprompt").draw_marks(
         np.zeros((20, 20, 3), np.uint8), _LAB, registry=5)), CLEAR,
          "registry must be a somprompt.MarkRegistry"),  # was: "'int' object has no attribute 'register'"
@@ -1459,6 +1469,27 @@ CASES: list[Case] = [
          "max_instances must be >= 1"),  # was: an empty label map
     Case("vlm/masks-to-labels-scores-nan", api(lambda t: _masks_to_labels(np.array([np.nan, 0.5]))), CLEAR,
          "scores must be finite"),  # was: the NaN mask painted last, whatever its score
+    Case("vlm/masks-to-labels-mask-nan", api(lambda t: __import__("vlm_adapters").masks_to_label_map(
+        np.full((1, 6, 6), np.nan))), CLEAR, "masks holds NaN"),  # was: every pixel labelled 1 (NaN is True)
+    Case("vlm/masks-to-labels-scores-str", api(lambda t: _masks_to_labels(["high", "low"])), CLEAR,
+         "scores must be numbers"),  # was: numpy's "could not convert string to float: 'high'"
+    Case("vlm/detections-phrases-str", api(lambda t: __import__("vlm_adapters").Detections(
+        np.stack([_M2[0]] * 3), [0.9, 0.8, 0.7], "cup")), CLEAR,
+         "phrases must be a list of str"),  # was: three instances named 'c', 'u', 'p'
+    Case("vlm/detections-phrases-none-item", api(lambda t: __import__("vlm_adapters").Detections(
+        _M2, [0.9, 0.8], ["cup", None])), CLEAR, "got an item NoneType"),  # was: an instance named None
+    Case("vlm/detections-scores-nan", api(lambda t: __import__("vlm_adapters").Detections(
+        _M2, [np.nan, 0.8])), CLEAR, "scores must be confidences in [0, 1]"),  # was: refused only by masks_to_label_map
+    Case("vlm/detections-scores-over-1", api(lambda t: __import__("vlm_adapters").Detections(
+        _M2, [5, 0.8])), CLEAR, "scores must be confidences in [0, 1]"),  # was: accepted as a confidence of 5
+    Case("vlm/detections-masks-nan", api(lambda t: __import__("vlm_adapters").Detections(
+        np.full((1, 6, 6), np.nan), [0.5])), CLEAR, "masks holds NaN"),  # was: an all-True mask
+    Case("vlm/yoloe-detect-phrases-str", api(lambda t: _yoloe().detect(np.zeros((8, 8, 3), np.uint8), "cup")),
+         CLEAR, "phrases must be a list of str"),  # was: classes 'c', 'u', 'p' (here: "No module named 'torch'")
+    Case("vlm/yoloe-detect-phrase-none", api(lambda t: _yoloe().detect(np.zeros((8, 8, 3), np.uint8), [None])),
+         CLEAR, "got an item NoneType"),  # was: the class "None" (here: "No module named 'torch'")
+    Case("vlm/yoloe-set-classes-str", api(lambda t: _yoloe().set_classes("cup", np.zeros((3, 4)))),
+         CLEAR, "names must be a list of str"),  # was: 3 classes 'c', 'u', 'p' (here: "No module named 'torch'")
     Case("vlm/yoloe-conf-nan", api(lambda t: _yoloe(conf=float("nan"))), CLEAR,
          "conf must be a number in [0, 1]"),  # was: accepted, passed to predict on the first image
     Case("vlm/yoloe-max-det-fraction", api(lambda t: _yoloe(max_det=2.5)), CLEAR,

@@ -20,14 +20,14 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from motionbits.frames import as_rgb_array, whole_number
-from motionbits.objects import Instance, instance_from_mask
+from motionbits.objects import Instance, check_mask, instance_from_mask
 
 from .base import Frame, MissingDependencyError, require
 from .phrases import phrases_from_answer
@@ -47,9 +47,10 @@ class Detections:
     """Instances found in one image.
 
     Attributes:
-        masks: (K, H, W) bool, one mask per instance, at the image's size.
-        scores: (K,) float32 confidences.
-        phrases: K strings, the text prompt each instance was found for.
+        masks: (K, H, W) bool, one mask per instance, at the image's size (numbers are
+            read as non-zero = object; NaN is an error).
+        scores: (K,) float32 confidences in [0, 1].
+        phrases: K strings, the text prompt each instance was found for, or [] for none.
     """
 
     masks: np.ndarray
@@ -57,12 +58,14 @@ class Detections:
     phrases: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.masks = np.asarray(self.masks, dtype=bool)
-        self.scores = np.asarray(self.scores, dtype=np.float32).reshape(-1)
-        if self.masks.ndim != 3:
-            raise ValueError(f"masks must be (K, H, W), got shape {self.masks.shape}")
+        self.masks = check_mask(self.masks, ndim=3, name="masks")  # NaN was read as True
+        self.scores = _scores(self.scores).astype(np.float32).reshape(-1)
         if len(self.scores) != len(self.masks):
             raise ValueError(f"{len(self.masks)} masks but {len(self.scores)} scores")
+        if self.scores.size and not (np.all(self.scores >= 0) and np.all(self.scores <= 1)):  # NaN: arbitrary order
+            raise ValueError(f"scores must be confidences in [0, 1] (finite), got {self.scores[:8]}")
+        # a str was one phrase per letter; None (or None in the list) failed in len() or became a name
+        self.phrases = phrase_list(self.phrases, "phrases")
         if self.phrases and len(self.phrases) != len(self.masks):
             raise ValueError(f"{len(self.masks)} masks but {len(self.phrases)} phrases")
 
@@ -80,6 +83,28 @@ class Detections:
             instance_from_mask(m, k + 1, score=float(s), name=self.phrases[k] if self.phrases else None)
             for k, (m, s) in enumerate(zip(self.masks, self.scores))
         ]
+
+
+def phrase_list(value: Any, name: str = "phrases") -> list[str]:
+    """``value`` as a list of str; TypeError for a bare str (read one phrase per letter),
+    None, or items that are not str (None became the phrase "None")."""
+    if isinstance(value, (str, bytes, dict)) or not isinstance(value, Iterable):
+        raise TypeError(f"{name} must be a list of str, got {type(value).__name__} {value!r:.60}"
+                        + (f" (for one phrase pass [{value!r:.40}])" if isinstance(value, str) else ""))
+    out = list(value)
+    bad = next((p for p in out if not isinstance(p, str)), out)
+    if bad is not out:
+        raise TypeError(f"{name} must be a list of str, got an item {type(bad).__name__} {bad!r:.40}")
+    return out
+
+
+def _scores(scores: Any, name: str = "scores") -> np.ndarray:
+    """``scores`` as a float64 array; TypeError for anything but numbers (else numpy's
+    "could not convert string to float", or None's "must be finite")."""
+    a = np.asarray(scores)
+    if a.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be numbers (one per mask), got {type(scores).__name__} {scores!r:.60}")
+    return a.astype(np.float64)
 
 
 def _check_counts(min_area: Any, max_instances: Any) -> None:
@@ -119,25 +144,25 @@ def masks_to_label_map(
     dropped. Labels are 1..K in descending-score order, with no gaps.
 
     Args:
-        masks: (K, H, W) bool.
-        scores: (K,) confidences; None paints in the given order.
+        masks: (K, H, W) bool (numbers: non-zero = object; NaN is an error).
+        scores: (K,) finite numbers, higher first; None paints in the given order.
         min_area: minimum visible pixels for an instance to keep a label.
         max_instances: keep at most this many labels (the highest-scoring ones).
 
     Returns:
         (H, W) int32 label map, 0 = background.
     """
-    masks = np.asarray(masks, dtype=bool)
-    if masks.ndim != 3:
-        raise ValueError(f"masks must be (K, H, W), got shape {masks.shape}")
+    masks = check_mask(masks, ndim=3, name="masks")  # a NaN mask was read as all True
     k, h, w = masks.shape
-    if scores is not None and np.shape(scores) != (k,):
-        raise ValueError(f"{k} masks but scores of shape {np.shape(scores)}; give one score per mask")
-    if scores is not None and not np.all(np.isfinite(np.asarray(scores, dtype=np.float64))):  # NaN: arbitrary order
-        raise ValueError(f"scores must be finite, got {np.asarray(scores)[:8]}")
+    if scores is not None:
+        scores = _scores(scores)
+    if scores is not None and scores.shape != (k,):
+        raise ValueError(f"{k} masks but scores of shape {scores.shape}; give one score per mask")
+    if scores is not None and not np.all(np.isfinite(scores)):  # NaN: arbitrary order
+        raise ValueError(f"scores must be finite, got {scores[:8]}")
     _check_counts(min_area, max_instances)
     labels = np.zeros((h, w), np.int32)
-    order = np.arange(k) if scores is None else np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
+    order = np.arange(k) if scores is None else np.argsort(-scores, kind="stable")
     next_label = 1
     for i in order:
         if max_instances is not None and next_label > max_instances:
@@ -251,9 +276,9 @@ class YOLOEDetector:
                 ``YOLOE.get_text_pe(names)`` returns them (text features already passed through
                 YOLOE's text head); None computes them with the text encoder.
         """
+        names = phrase_list(names, "names")  # "cup" was three classes c, u, p; None the class "None"
         import torch
 
-        names = [str(n) for n in names]
         if embeddings is None:
             emb = self._embed(names)
         else:
@@ -316,10 +341,11 @@ class YOLOEDetector:
         self._active = list(phrases)
 
     def detect(self, image: Frame, phrases: Sequence[str]) -> Detections:
-        """Instances of `phrases` in `image` ((H, W, 3) uint8 RGB or PIL); masks at (H, W)."""
+        """Instances of `phrases` (a list of str) in `image` ((H, W, 3) uint8 RGB or PIL);
+        masks at (H, W)."""
         rgb = as_rgb_array(image, name="image")
         h, w = rgb.shape[:2]
-        phrases = list(dict.fromkeys(str(p) for p in phrases))
+        phrases = list(dict.fromkeys(phrase_list(phrases)))  # "cup" was read as c, u, p
         if not phrases:
             return Detections.empty(h, w)
         self._activate(phrases)
