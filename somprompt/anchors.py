@@ -150,6 +150,21 @@ def _ring_offsets(radius: int, step: int) -> np.ndarray:
     return offs[np.argsort(np.hypot(offs[:, 0], offs[:, 1]), kind="stable")]
 
 
+def _points(name: str, pairs: Mapping, low: int | None) -> dict[int, tuple[int, int]]:
+    """``pairs`` (object id -> two whole numbers, each >= ``low``) as a dict of int pairs."""
+    if not isinstance(pairs, Mapping):  # a list of sizes placed nothing
+        raise TypeError(f"{name} must be a mapping of object id -> (a, b), got {type(pairs).__name__} {pairs!r:.40}")
+    out = {}
+    for k, v in pairs.items():
+        if isinstance(v, (str, bytes)) or np.shape(v) != (2,):
+            raise ValueError(f"{name}[{k!r}] must be two whole numbers, got {v!r:.40}")
+        a, b = (whole_number(f"{name}[{k!r}]", x) for x in v)
+        if low is not None and min(a, b) < low:
+            raise ValueError(f"{name}[{k!r}] must be two whole numbers >= {low}, got {v!r:.40}")
+        out[k] = (a, b)
+    return out
+
+
 def place_labels(
     regions: LabelRegions,
     sizes: Mapping[int, tuple[int, int]],
@@ -172,8 +187,13 @@ def place_labels(
         object id -> :class:`LabelPlacement`, for every id in both ``regions`` and
         ``sizes``.
     """
+    if not isinstance(regions, LabelRegions):  # else "'numpy.ndarray' object has no attribute 'obj_id'"
+        raise TypeError(f"regions must be a somprompt.LabelRegions (LabelRegions(label_map)), got {type(regions).__name__}")
+    sizes = _points("sizes", sizes, low=1)  # else (-4, 4) gave an inverted box, NaN "cannot convert float NaN"
+    prefer = _points("prefer", prefer or {}, low=None)
+    if whole_number("gap", gap) < 0:  # else NaN and -1 were taken as no gap
+        raise ValueError(f"gap must be >= 0 pixels, got {gap!r}")
     H, W = regions.shape
-    prefer = prefer or {}
     todo: list[tuple[Region, np.ndarray]] = []
     for reg in regions:
         if reg.obj_id in sizes:

@@ -251,7 +251,9 @@ class NumberAnnotator(_Annotator):
         self.text_scale = None if text_scale is None else float(text_scale)
         self.text_thickness = None if text_thickness is None else max(1, int(text_thickness))
         self.text_padding = _check_thickness(text_padding, "text_padding", low=0)  # inf overflowed in int()
-        self.gap = max(0, int(gap))
+        if whole_number("gap", gap) < 0:  # else NaN failed in int(), -1 was read as 0
+            raise ValueError(f"gap must be >= 0 pixels, got {gap!r}")
+        self.gap = int(gap)
 
     def _font(self, shape: tuple[int, int]) -> tuple[float, int]:
         scale = self.text_scale if self.text_scale is not None else auto_text_scale(shape)

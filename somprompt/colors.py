@@ -7,6 +7,8 @@ from typing import Sequence
 
 import numpy as np
 
+from motionbits.frames import whole_number
+
 __all__ = [
     "Color", "ColorPalette", "to_hex", "relative_luminance", "contrast_ratio", "contrasting_color",
 ]
@@ -109,7 +111,9 @@ class ColorPalette:
         return len(self.colors)
 
     def by_number(self, number: int) -> Color:
-        """Colour of mark number ``number`` (1-based)."""
+        """Colour of mark number ``number`` (1-based, a whole number)."""
+        if whole_number("number", number) < 1:  # else NaN failed in int(), 0 gave the last colour, 2.5 mark 2's
+            raise ValueError(f"mark numbers start at 1, got {number!r}")
         return self.colors[(int(number) - 1) % len(self.colors)]
 
 

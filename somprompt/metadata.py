@@ -7,10 +7,12 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Mapping
 
+from motionbits.frames import whole_number
+
 from .anchors import LabelPlacement, mask_anchor
 from .colors import ColorPalette, to_hex
-from .registry import MarkRegistry
-from .regions import LabelRegions
+from .registry import MarkRegistry, check_registry
+from .regions import LabelRegions, as_regions
 
 __all__ = ["MarkInfo", "describe_marks", "marks_to_json", "save_marks_json"]
 
@@ -56,7 +58,7 @@ def describe_marks(
     """Metadata of the marks of one frame.
 
     Args:
-        regions: the frame's label map regions.
+        regions: the frame's label map regions (or its (H, W) label map).
         registry: id -> number; ids of ``regions`` not in it are registered.
         placements: label placements of the frame (their points are the anchors); ids
             without one get the distance-transform maximum of their mask.
@@ -66,6 +68,11 @@ def describe_marks(
     Returns:
         object id -> :class:`MarkInfo`, in mark-number order.
     """
+    regions = as_regions(regions)  # a label map is read as its regions (was: no attribute 'ids')
+    check_registry(registry)
+    if frame_index is not None and whole_number("frame_index", frame_index) < 0:  # NaN was written to the JSON
+        raise ValueError(f"frame_index must be >= 0 or None, got {frame_index!r}")
+    frame_index = None if frame_index is None else int(frame_index)
     palette = palette if palette is not None else ColorPalette.default()
     placements = placements or {}
     registry.register(i for i in regions.ids if i not in registry)

@@ -8,6 +8,8 @@ from functools import cached_property
 import numpy as np
 from scipy import ndimage
 
+from motionbits.frames import whole_number
+
 from .inputs import check_label_map
 
 __all__ = ["Region", "LabelRegions", "as_regions"]
@@ -107,6 +109,9 @@ class LabelRegions:
             else new regions on the map with the dropped objects set to background, and
             the dropped ids, smallest object first.
         """
+        if whole_number("n", n) < 0:  # else -1 kept all but the smallest, 2.5 and NaN failed in a slice
+            raise ValueError(f"n must be >= 0 objects, got {n!r}")
+        n = int(n)
         areas = self.areas
         if len(areas) <= n:
             return self, []
@@ -123,8 +128,8 @@ class LabelRegions:
         return sorted(self._by_id)
 
     def __getitem__(self, obj_id: int) -> Region:
-        try:
-            return self._by_id[int(obj_id)]
+        try:  # whole numbers only: 3.5 and "3" were read as id 3
+            return self._by_id[whole_number("obj_id", obj_id)]
         except KeyError:
             raise KeyError(f"object id {obj_id} is not in this label map (ids: {self.ids[:20]})") from None
 

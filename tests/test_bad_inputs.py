@@ -1403,6 +1403,10 @@ CASES: list[Case] = [
          CLEAR, "temperature must be a finite number >= 0"),  # was: sent "temperature": Infinity (not JSON)
     Case("vlm/openai-seed-fraction", api(lambda t: _openai_generate(seed=1.5)), CLEAR,
          "seed must be a whole number"),  # was: sent "seed": 1
+    Case("vlm/sample-frames-str", api(lambda t: __import__("vlm_adapters").sample_frames("abc", 2)), CLEAR,
+         "frames must be a list"),  # was: ['a', 'c'] (letters sampled as frames)
+    Case("vlm/sample-frames-one-array", api(lambda t: __import__("vlm_adapters").sample_frames(_F[0], 2)), CORRECT,
+         check=lambda o, t: len(o.value) == 1 and np.array_equal(o.value[0], _F[0])),  # was: rows 0 and 119 as two "frames"
     Case("vlm/generate-batch-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate_batch(
         None, "what moved?")), CLEAR, "videos must be a list of videos"),  # was: "object of type 'NoneType' has no len()"
     Case("vlm/generate-batch-prompts-none", api(lambda t: __import__("vlm_adapters").StubVLM("ok").generate_batch(
@@ -1443,6 +1447,32 @@ CASES: list[Case] = [
     Case("somprompt/mask-anchor-object-array", api(lambda t: __import__("somprompt").mask_anchor(
         np.array([[None, 1]]))), CLEAR, "mask must be a bool or numeric array"),
     # was: "int() argument must be a string, a bytes-like object or a real number, not 'NoneType'"
+    Case("somprompt/regions-mask-fraction", api(lambda t: __import__("somprompt").LabelRegions(_LAB).mask(3.5)),
+         CLEAR, "obj_id must be a whole number"),  # was: the mask of id 3 ("3" likewise)
+    Case("somprompt/regions-largest-negative", api(lambda t: __import__("somprompt").LabelRegions(_LAB).largest(-1)),
+         CLEAR, "n must be >= 0"),  # was: every object but the smallest kept (a slice [:-1])
+    Case("somprompt/place-labels-size-negative", api(lambda t: __import__("somprompt").place_labels(
+        __import__("somprompt").LabelRegions(_LAB), {3: (-4, 4), 5: (4, 4)})), CLEAR,
+         "sizes[3] must be two whole numbers >= 1"),  # was: an inverted box (6, 2, 2, 6)
+    Case("somprompt/place-labels-sizes-list", api(lambda t: __import__("somprompt").place_labels(
+        __import__("somprompt").LabelRegions(_LAB), [(4, 4), (4, 4)])), CLEAR,
+         "sizes must be a mapping"),  # was: {} (nothing placed)
+    Case("somprompt/place-labels-gap-nan", api(lambda t: __import__("somprompt").place_labels(
+        __import__("somprompt").LabelRegions(_LAB), {3: (4, 4)}, gap=float("nan"))), CLEAR,
+         "gap must be a whole number"),  # was: read as no gap
+    Case("somprompt/render-prefer-nan", api(lambda t: __import__("somprompt").SetOfMarkRenderer().render(
+        np.zeros((20, 20, 3), np.uint8), _LAB, prefer={3: (np.nan, 1)})), CLEAR,
+         "prefer[3] must be a whole number"),  # was: "cannot convert float NaN to integer"
+    Case("somprompt/number-annotator-gap-nan", api(lambda t: __import__("somprompt").NumberAnnotator(gap=float("nan"))),
+         CLEAR, "gap must be a whole number"),  # was: "cannot convert float NaN to integer"
+    Case("somprompt/describe-marks-label-map", api(lambda t: __import__("somprompt").describe_marks(
+        _LAB, __import__("somprompt").MarkRegistry())), CORRECT,
+         check=lambda o, t: list(o.value) == [3, 5]),  # was: "'numpy.ndarray' object has no attribute 'ids'"
+    Case("somprompt/describe-marks-frame-nan", api(lambda t: __import__("somprompt").describe_marks(
+        __import__("somprompt").LabelRegions(_LAB), __import__("somprompt").MarkRegistry(), frame_index=float("nan"))),
+         CLEAR, "frame_index must be a whole number"),  # was: "frame": NaN in the marks' JSON
+    Case("somprompt/palette-by-number-0", api(lambda t: __import__("somprompt").ColorPalette.default().by_number(0)),
+         CLEAR, "mark numbers start at 1"),  # was: the last colour (NaN: "cannot convert float NaN to integer")
     Case("somprompt/draw-registry-int", api(lambda t: __import__("somprompt").draw_marks(
         np.zeros((20, 20, 3), np.uint8), _LAB, registry=5)), CLEAR,
          "registry must be a somprompt.MarkRegistry"),  # was: "'int' object has no attribute 'register'"

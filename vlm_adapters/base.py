@@ -81,8 +81,19 @@ def sample_frames(frames: Sequence[Frame], num_frames: int | None) -> list[Frame
     (see :func:`motionbits.sample_frame_indices`).
 
     `None` or a number >= len(frames) keeps every frame. The final frame is the one the
-    benchmark scores, so it is always included.
+    benchmark scores, so it is always included. As in :func:`to_rgb_frames`, one (H, W, 3)
+    array or PIL image is a one-frame video (an array's rows were sampled as frames).
+
+    Raises:
+        TypeError: `frames` is a str (its letters were sampled as frames), None or not a sequence.
     """
+    if isinstance(frames, np.ndarray) and frames.ndim in (2, 3) or hasattr(frames, "convert"):
+        frames = [frames]
+    elif isinstance(frames, np.ndarray) and frames.ndim != 4:
+        raise ValueError(f"frames must be (T, H, W, 3) or a list of (H, W, 3); got shape {frames.shape}")
+    elif isinstance(frames, (str, bytes)) or not (hasattr(frames, "__len__") and hasattr(frames, "__getitem__")):
+        raise TypeError("frames must be a list of (H, W, 3) uint8 RGB arrays or PIL images, or a "
+                        f"(T, H, W, 3) array; got {type(frames).__name__} {frames!r:.40}")
     return [frames[i] for i in sample_frame_indices(len(frames), num_frames)]
 
 
