@@ -1609,6 +1609,9 @@ CASES: list[Case] = [
         t / "c.mp4", n_frames=2, size=(0, 0))), CLEAR, "size must be"),  # was: OpenCV "inv_scale_x > 0"
     Case("demos/stub-answer-empty", api(lambda t: __import__("demos.vlm").vlm.stub_answer([])), CLEAR,
          "label_maps must be a non-empty list"),  # was: IndexError
+    Case("demos/agent-arguments-dict", api(lambda t: __import__("demos.agent_example").agent_example._arguments(
+        {"video": "clip.mp4", "n_nodes": 400})), CORRECT, check=lambda o, t: o.value == {"video": "clip.mp4", "n_nodes": 400}),
+    # was: "the tool call's arguments are not valid JSON (the JSON object must be str, ... not dict)"
     Case("demos/answer-max-new-tokens-fraction", api(lambda t: __import__("demos.tool").tool.answer_question(
         _seg(), "what moved?", max_new_tokens=2.5)), CLEAR, "max_new_tokens must be a whole number"),  # was: 2
     Case("demos/answer-max-new-tokens-0", api(lambda t: __import__("demos.tool").tool.answer_question(
