@@ -69,9 +69,12 @@ def _call(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
 
 def _arguments(text: Any) -> dict[str, Any] | str:
     """A tool call's arguments as the LLM wrote them (a JSON object; empty = none), or the
-    error message to send back to it as the tool's result."""
+    error message to send back to it as the tool's result. Arguments a client has already
+    decoded into a dict (Ollama's does) are taken as they are."""
     if text is None or (isinstance(text, str) and not text.strip()):
         return {}
+    if isinstance(text, dict):  # was: "not valid JSON (the JSON object must be str ..., not dict)"
+        return dict(text)
     try:
         arguments = json.loads(text)
     except (TypeError, ValueError) as e:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motionbits.frames import whole_number
+from motionbits.objects import check_mask
 
 __all__ = ["GraspProposal", "grasp_from_mask", "grasp_proposals"]
 
@@ -77,13 +78,9 @@ def grasp_from_mask(mask: np.ndarray) -> GraspProposal:
 
     Raises:
         ValueError: ``mask`` is not 2-D, holds NaN or has no pixel set.
+        TypeError: ``mask`` is not a bool or numeric array.
     """
-    mask = np.asarray(mask)
-    if mask.ndim != 2:
-        raise ValueError(f"mask must be a 2-D (H, W) array, got shape {mask.shape}")
-    if mask.dtype.kind in "fc" and not np.isfinite(mask).all():  # NaN is non-zero: "object"
-        raise ValueError("mask holds NaN or infinite values; a mask is 0 (background) or "
-                         "non-zero (object)")
+    mask = check_mask(mask)  # NaN is non-zero: "object"
     ys, xs = np.nonzero(mask)
     if xs.size == 0:
         raise ValueError("mask is empty: no pixel to grasp")

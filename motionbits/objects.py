@@ -169,7 +169,8 @@ def check_mask(mask: Any, *, ndim: int = 2, name: str = "mask") -> np.ndarray:
         raise TypeError(f"{name} must be a bool or numeric array (non-zero = object), got "
                         f"{type(mask).__name__}" + (f" of {m.dtype}" if isinstance(mask, np.ndarray) else ""))
     if m.ndim != ndim:
-        raise ValueError(f"{name} must be {'(K, H, W)' if ndim == 3 else '(H, W)'}, got shape {m.shape}")
+        raise ValueError(f"{name} must be {'(K, H, W)' if ndim == 3 else '(H, W)'} (a {ndim}-D array), "
+                         f"got shape {m.shape}")
     if m.dtype.kind == "f" and not np.isfinite(m).all():
         raise ValueError(f"{name} holds NaN or infinite values; a mask is bool, or 0 (background) "
                          "and non-zero (object)")
@@ -235,14 +236,13 @@ def instance_from_mask(mask: np.ndarray, id: int, *, rle: bool = False, **fields
     """:class:`Instance` of one (H, W) bool mask: box, area and centroid measured on it.
 
     Args:
-        mask: (H, W) bool (an empty mask gives box (0, 0, 0, 0), area 0, centroid NaN).
+        mask: (H, W) bool, or numbers where non-zero is the object (NaN is an error; an
+            empty mask gives box (0, 0, 0, 0), area 0, centroid NaN).
         id: the object's id.
         rle: store the mask as COCO RLE instead of the array (extra ``coco``).
         **fields: other :class:`Instance` fields (``score``, ``name``, ``twist``, ...).
     """
-    m = np.asarray(mask, dtype=bool)
-    if m.ndim != 2:
-        raise ValueError(f"mask must be (H, W), got shape {m.shape}")
+    m = check_mask(mask)  # a NaN mask was read as all True, None as one False pixel
     id = _object_id(id, "id")
     ys, xs = np.nonzero(m)
     if xs.size:

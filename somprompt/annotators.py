@@ -76,8 +76,23 @@ MAX_TEXT_SCALE = MAX_THICKNESS / 2
 
 
 def auto_text_scale(shape: tuple[int, int]) -> float:
-    """OpenCV font scale for an image of ``shape`` (H, W): 0.8 at 480x640, in [0.35, 3]."""
-    return float(np.clip(min(shape[:2]) / 600.0, 0.35, 3.0))
+    """OpenCV font scale for an image of ``shape`` (H, W): 0.8 at 480x640, in [0.35, 3].
+
+    Raises:
+        TypeError: ``shape`` is not (H, W) or (H, W, C) of whole numbers (NaN gave a NaN
+            scale, a str failed in "unsupported operand type(s) for /").
+        ValueError: a negative side.
+    """
+    try:
+        hw = list(shape)[:2] if not isinstance(shape, (str, bytes)) else []
+    except TypeError:  # an int: "'int' object is not subscriptable"
+        hw = []
+    if len(hw) != 2:
+        raise TypeError(f"shape must be (H, W) or (H, W, C), got {type(shape).__name__} {shape!r:.40}")
+    h, w = (whole_number(f"shape[{i}]", v) for i, v in enumerate(hw))
+    if min(h, w) < 0:
+        raise ValueError(f"shape must be (H, W) in pixels >= 0, got {shape!r:.40}")
+    return float(np.clip(min(h, w) / 600.0, 0.35, 3.0))
 
 
 class _Annotator:
@@ -222,7 +237,7 @@ class NumberAnnotator(_Annotator):
         palette: colours by mark number.
         text_scale: OpenCV font scale, in (0, 16383.5]; ``None`` picks one from the image
             size (:func:`auto_text_scale`).
-        text_thickness: stroke width; ``None`` follows the scale.
+        text_thickness: stroke width, a whole number in [1, 32767]; ``None`` follows the scale.
         text_padding: pixels between text and box edge, a whole number in [0, 32767].
         gap: minimum pixels between two label boxes.
 
@@ -249,7 +264,8 @@ class NumberAnnotator(_Annotator):
         if text_scale is not None and not 0 < float(text_scale) <= MAX_TEXT_SCALE:  # inf overflowed in round(2 * scale)
             raise ValueError(f"text_scale must be > 0 and <= {MAX_TEXT_SCALE:g}, got {text_scale}")
         self.text_scale = None if text_scale is None else float(text_scale)
-        self.text_thickness = None if text_thickness is None else max(1, int(text_thickness))
+        # 0 was silently drawn as 1, 2.5 as 2, inf overflowed in int()
+        self.text_thickness = None if text_thickness is None else _check_thickness(text_thickness, "text_thickness")
         self.text_padding = _check_thickness(text_padding, "text_padding", low=0)  # inf overflowed in int()
         if whole_number("gap", gap) < 0:  # else NaN failed in int(), -1 was read as 0
             raise ValueError(f"gap must be >= 0 pixels, got {gap!r}")

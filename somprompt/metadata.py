@@ -110,24 +110,58 @@ def marks_to_json(
     Args:
         marks: id -> MarkInfo (e.g. from :func:`describe_marks` or ``MarkedVideo.marks``).
         style: ``"number"`` / ``"letter"``, recorded if given.
-        image_size: ``(W, H)`` of the frames the geometry refers to, recorded if given.
+        image_size: ``(W, H)`` of the frames the geometry refers to, two whole numbers
+            >= 1, recorded if given.
+        indent: as in :func:`json.dumps`: a whole number, a str, or None (one line).
 
     Returns:
         JSON text: ``{"style": ..., "image_size": [W, H], "marks": [{...}, ...]}`` with
         marks in number order, keys as in :class:`MarkInfo`.
+
+    Raises:
+        TypeError: ``marks`` is not a mapping of MarkInfo (a list failed with "'list' object
+            has no attribute 'values'"), ``style`` not a str, ``image_size`` not two whole
+            numbers (NaN failed in int(), 2.5 was written as 2), ``indent`` a NaN or a bool.
+        ValueError: an ``image_size`` side < 1.
     """
+    if not isinstance(marks, Mapping):
+        raise TypeError(f"marks must be a mapping id -> MarkInfo (as describe_marks returns), got "
+                        f"{type(marks).__name__} {marks!r:.40}")
+    bad = next((m for m in marks.values() if not isinstance(m, MarkInfo)), None)
+    if bad is not None:
+        raise TypeError(f"marks must map ids to somprompt.MarkInfo, got a {type(bad).__name__} {bad!r:.40}")
+    if style is not None and not isinstance(style, str):
+        raise TypeError(f"style must be a str (\"number\" / \"letter\") or None, got {type(style).__name__} {style!r:.40}")
+    if indent is not None and not isinstance(indent, str):
+        indent = whole_number("indent", indent)  # NaN failed in json's "can't multiply sequence by non-int"
     doc: dict = {}
     if style is not None:
         doc["style"] = style
     if image_size is not None:
-        doc["image_size"] = [int(image_size[0]), int(image_size[1])]
+        doc["image_size"] = _image_size(image_size)
     doc["marks"] = [m.to_dict() for m in sorted(marks.values(), key=lambda m: m.number)]
     return json.dumps(doc, indent=indent)
+
+
+def _image_size(image_size: object) -> list[int]:
+    """``image_size`` as ``[W, H]``, two whole numbers >= 1."""
+    try:
+        sides = list(image_size) if not isinstance(image_size, (str, bytes)) else None
+    except TypeError:  # 20: "'int' object is not subscriptable"
+        sides = None
+    if sides is None or len(sides) != 2:
+        raise TypeError(f"image_size must be (W, H), two whole numbers, got {type(image_size).__name__} "
+                        f"{image_size!r:.40}")
+    wh = [whole_number(f"image_size[{i}]", v) for i, v in enumerate(sides)]
+    if min(wh) < 1:
+        raise ValueError(f"image_size must be (W, H) in pixels >= 1, got {image_size!r:.40}")
+    return wh
 
 
 def save_marks_json(path: "str | Path", marks: Mapping[int, MarkInfo], **kwargs) -> Path:
     """Write :func:`marks_to_json` to ``path``; returns the path."""
     path = Path(path)
+    text = marks_to_json(marks, **kwargs)  # bad arguments: no folder made, no file written
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(marks_to_json(marks, **kwargs) + "\n", encoding="utf-8")
+    path.write_text(text + "\n", encoding="utf-8")
     return path

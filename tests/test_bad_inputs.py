@@ -622,6 +622,32 @@ def _yoloe(**kw):
     return YOLOEDetector(object(), device="cpu", **kw)
 
 
+def _yoloe_sent(phrases):
+    """The phrase lists a YOLOEDetector's detect hands on to the model (``_activate``)."""
+    det, sent = _yoloe(), []
+
+    class Sent(Exception):
+        pass
+
+    def activate(p):
+        sent.append(list(p))
+        raise Sent
+
+    det._activate = activate
+    with contextlib.suppress(Sent):
+        det.detect(np.zeros((8, 8, 3), np.uint8), phrases)
+    return sent
+
+
+def _marks_json(marks=None, **kw):
+    """``somprompt.marks_to_json`` of the marks of ``_LAB`` (or of ``marks``)."""
+    import somprompt
+
+    if marks is None:
+        marks = somprompt.describe_marks(somprompt.LabelRegions(_LAB), somprompt.MarkRegistry())
+    return somprompt.marks_to_json(marks, **kw)
+
+
 def _vlm_yoloe(**kw):
     """vlm-yoloe with string options whose files do not exist (the option checks come first)."""
     from vlm_adapters.plugin import vlm_yoloe_method
@@ -1109,6 +1135,8 @@ CASES: list[Case] = [
          CLEAR, "min_area must be a whole number"),  # was: accepted as 1.5 pixels
     Case("api/grasp-negative-labels", api(lambda t: __import__("motionbits").grasp_proposals(-_LAB)),
          CLEAR, "negative ids"),  # was: grasps of objects -3 and -5
+    Case("api/instance-from-mask-nan", api(lambda t: __import__("motionbits").instance_from_mask(
+        np.where(_LAB == 3, 1.0, np.nan), 3)), CLEAR, "mask holds NaN"),  # was: an Instance of the whole image
     Case("api/grasp-mask-nan", api(lambda t: __import__("motionbits").grasp_from_mask(np.where(_LAB == 3, 1.0, np.nan))),
          CLEAR, "mask holds NaN"),  # was: a grasp of the whole image (NaN is non-zero)
     # ---- motionbits API: eval
@@ -1205,6 +1233,19 @@ CASES: list[Case] = [
          "thickness must be in [1, 32767]"),  # was: OpenCV's "thickness <= MAX_THICKNESS" assertion
     Case("somprompt/text-scale-inf", api(lambda t: _draw(_LAB, text_scale=float("inf"))), CLEAR,
          "text_scale must be > 0 and <= 16383.5"),  # was: OverflowError "cannot convert float infinity to integer"
+    Case("somprompt/text-thickness-0", api(lambda t: __import__("somprompt").NumberAnnotator(text_thickness=0)),
+         CLEAR, "text_thickness must be in [1, 32767]"),  # was: silently drawn 1 px thick
+    Case("somprompt/auto-text-scale-nan", api(lambda t: __import__("somprompt").auto_text_scale((float("nan"), 4))),
+         CLEAR, "shape[0] must be a whole number"),  # was: a NaN font scale
+    Case("somprompt/auto-text-scale-str", api(lambda t: __import__("somprompt").auto_text_scale("ab")),
+         CLEAR, "shape must be (H, W)"),  # was: "unsupported operand type(s) for /: 'str' and 'float'"
+    Case("somprompt/marks-json-size-nan", api(lambda t: _marks_json(image_size=(float("nan"), 20))),
+         CLEAR, "image_size[0] must be a whole number"),  # was: "cannot convert float NaN to integer"
+    Case("somprompt/marks-json-indent-nan", api(lambda t: _marks_json(indent=float("nan"))),
+         CLEAR, "indent must be a whole number"),  # was: "can't multiply sequence by non-int of type 'float'"
+    Case("somprompt/marks-json-list", api(lambda t: _marks_json(list(__import__("somprompt").describe_marks(
+        _LAB, __import__("somprompt").MarkRegistry()).values()))),
+         CLEAR, "marks must be a mapping id -> MarkInfo"),  # was: AttributeError "'list' object has no attribute 'values'"
     Case("somprompt/text-padding-inf", api(lambda t: __import__("somprompt").NumberAnnotator(text_padding=float("inf"))),
          CLEAR, "text_padding must be a whole number"),  # was: OverflowError "cannot convert float infinity to integer"
     Case("somprompt/draw-uint64-huge-ids", api(lambda t: _draw(np.where(_LAB > 0, np.uint64(2**63 + 5), np.uint64(0)))),
@@ -1351,6 +1392,8 @@ CASES: list[Case] = [
          check=lambda o, t: o.value.max() == round(_GRAD16.max() / 257)),
     Case("vlm/frame-complex", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.complex64))), CLEAR, "uint8"),
     Case("vlm/frame-int32", api(lambda t: _adapter_frame(np.zeros((8, 8, 3), np.int32))), CLEAR, "uint8"),
+    Case("vlm/stub-cycle-str", api(lambda t: __import__("vlm_adapters").StubVLM(["a"], cycle="no")), CLEAR,
+         "cycle must be True or False"),  # was: "no" read as True (answers started over)
     Case("vlm/stub-none", api(lambda t: __import__("vlm_adapters").StubVLM(None)), CLEAR,
          "responses must be"),  # was: "'NoneType' object is not iterable"
     Case("vlm/noun-phrases-none", api(lambda t: __import__("vlm_adapters").extract_noun_phrases(None)), CLEAR,
@@ -1518,6 +1561,8 @@ CASES: list[Case] = [
          CLEAR, "phrases must be a list of str"),  # was: classes 'c', 'u', 'p' (here: "No module named 'torch'")
     Case("vlm/yoloe-detect-phrase-none", api(lambda t: _yoloe().detect(np.zeros((8, 8, 3), np.uint8), [None])),
          CLEAR, "got an item NoneType"),  # was: the class "None" (here: "No module named 'torch'")
+    Case("vlm/yoloe-detect-blank-phrases", api(lambda t: _yoloe_sent(["", "cup", " ", "cup"])), CORRECT,
+         check=lambda o, t: o.value == [["cup"]]),  # was: "" and " " sent to YOLOE as classes
     Case("vlm/yoloe-set-classes-str", api(lambda t: _yoloe().set_classes("cup", np.zeros((3, 4)))),
          CLEAR, "names must be a list of str"),  # was: 3 classes 'c', 'u', 'p' (here: "No module named 'torch'")
     Case("vlm/yoloe-conf-nan", api(lambda t: _yoloe(conf=float("nan"))), CLEAR,
@@ -1564,6 +1609,9 @@ CASES: list[Case] = [
         t / "c.mp4", n_frames=2, size=(0, 0))), CLEAR, "size must be"),  # was: OpenCV "inv_scale_x > 0"
     Case("demos/stub-answer-empty", api(lambda t: __import__("demos.vlm").vlm.stub_answer([])), CLEAR,
          "label_maps must be a non-empty list"),  # was: IndexError
+    Case("demos/agent-arguments-dict", api(lambda t: __import__("demos.agent_example").agent_example._arguments(
+        {"video": "clip.mp4", "n_nodes": 400})), CORRECT, check=lambda o, t: o.value == {"video": "clip.mp4", "n_nodes": 400}),
+    # was: "the tool call's arguments are not valid JSON (the JSON object must be str, ... not dict)"
     Case("demos/answer-max-new-tokens-fraction", api(lambda t: __import__("demos.tool").tool.answer_question(
         _seg(), "what moved?", max_new_tokens=2.5)), CLEAR, "max_new_tokens must be a whole number"),  # was: 2
     Case("demos/answer-max-new-tokens-0", api(lambda t: __import__("demos.tool").tool.answer_question(

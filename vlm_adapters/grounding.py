@@ -342,10 +342,12 @@ class YOLOEDetector:
 
     def detect(self, image: Frame, phrases: Sequence[str]) -> Detections:
         """Instances of `phrases` (a list of str) in `image` ((H, W, 3) uint8 RGB or PIL);
-        masks at (H, W)."""
+        masks at (H, W). Blank phrases ("", "  ") are dropped, as `TextGrounder` drops
+        them, and repeats are asked once; no phrase left gives no detections."""
         rgb = as_rgb_array(image, name="image")
         h, w = rgb.shape[:2]
-        phrases = list(dict.fromkeys(phrase_list(phrases)))  # "cup" was read as c, u, p
+        # "cup" was read as c, u, p; "" and " " were sent to YOLOE as classes
+        phrases = list(dict.fromkeys(p for p in phrase_list(phrases) if p.strip()))
         if not phrases:
             return Detections.empty(h, w)
         self._activate(phrases)

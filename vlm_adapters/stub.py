@@ -40,7 +40,7 @@ class StubVLM(BaseVLM):
         responses: one answer for every call; or a list of answers returned in turn
             (cycling when `cycle=True`, else an error when they run out); or a callable
             ``(frames, prompt) -> str`` where frames are (H, W, 3) uint8 arrays.
-        cycle: whether a list of answers starts over when used up.
+        cycle: whether a list of answers starts over when used up (True or False).
         name: short name for tables.
 
     Example:
@@ -69,7 +69,9 @@ class StubVLM(BaseVLM):
             bad = [r for r in self._answers if not isinstance(r, str)]
             if bad:
                 raise TypeError(f"StubVLM responses must be strings, got {type(bad[0]).__name__} {bad[0]!r:.40}")
-        self.cycle = cycle
+        if not isinstance(cycle, (bool, np.bool_)):  # else "no" (or any non-empty str) read as True
+            raise TypeError(f"cycle must be True or False, got {type(cycle).__name__} {cycle!r:.40}")
+        self.cycle = bool(cycle)
         self.name = name
         self.calls: list[StubCall] = []
 
