@@ -187,6 +187,39 @@ def test_local_pool_survives_a_killed_worker(tmp_path):
     assert psutil.pid_exists(killed[0]) is False or psutil.Process(killed[0]).status() == "zombie"
 
 
+def _take(lock) -> None:
+    """Take ``lock`` (a multiprocessing lock) and return, leaving it held."""
+    lock.acquire()
+
+
+def test_a_progress_lock_left_held_does_not_hang_a_worker_at_exit():
+    """A worker killed while writing progress leaves the queue's lock held for good; a
+    worker that wrote to that queue then waited at exit for its feeder thread, and the
+    pool's shutdown with it (CI hung so once, under load). Here a process takes the lock
+    and exits; a pool worker set up as the batch's are reports progress and must still
+    exit."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    from motionbits.batch.local import _init_worker, _report
+
+    ctx = mp.get_context("spawn")
+    progress = ctx.Queue()
+    holder = ctx.Process(target=_take, args=(progress._wlock,))  # exits holding the lock
+    holder.start()
+    holder.join(60)
+    ex = ProcessPoolExecutor(1, mp_context=ctx, initializer=_init_worker, initargs=(progress,))
+    ex.submit(_report, "clip", 1, 2).result(timeout=60)
+    workers = list(ex._processes.values())
+    closed = threading.Thread(target=ex.shutdown, daemon=True)
+    closed.start()
+    closed.join(30)
+    hung = closed.is_alive()
+    for p in workers:  # leave nothing behind if it hung
+        p.kill()
+    assert not hung, "the pool's shutdown waited on a worker stuck at exit"
+
+
 def test_ray_batch_survives_a_killed_worker(tmp_path):
     pytest.importorskip("ray", reason="the ray extra is not installed")
     clips = [write_clip(tmp_path / "in" / f"c{i}", frames=12, seed=i) for i in range(4)]

@@ -33,6 +33,9 @@ def _die_with_parent() -> None:
 def _init_worker(progress_queue) -> None:
     global _progress_queue
     _progress_queue = progress_queue
+    # progress is best effort: a worker never waits at exit for its queue's feeder thread,
+    # which blocks for good on the queue's lock if another worker was killed holding it
+    progress_queue.cancel_join_thread()
     _die_with_parent()
     # Ctrl-C reaches the whole process group: a worker stops at once, without a traceback,
     # and the batch process reports the interruption (the video is redone on resume)
@@ -61,7 +64,8 @@ def run_local(items: Iterable[BatchInput], out_dir: str, options: dict, *, worke
 
     A worker that dies (killed, out of memory, a crash in a decoder) breaks the pool: the
     videos it was running with are run again one at a time in a fresh process, and one
-    whose process dies again there is recorded as failed.
+    whose process dies again there is recorded as failed. Each pool has a progress queue
+    of its own: a worker killed while writing to one leaves its lock held for good.
     """
     ctx = mp.get_context("spawn")
     progress = ctx.Queue()
@@ -76,6 +80,10 @@ def run_local(items: Iterable[BatchInput], out_dir: str, options: dict, *, worke
                 return
 
     def pool(n: int) -> ProcessPoolExecutor:
+        nonlocal progress
+        drain()
+        progress.close()
+        progress = ctx.Queue()
         return ProcessPoolExecutor(n, mp_context=ctx, initializer=_init_worker,
                                    initargs=(progress,))
 
