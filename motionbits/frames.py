@@ -6,6 +6,7 @@ refused, and a clip is sampled, the same way everywhere. Imports only numpy.
 
 from __future__ import annotations
 
+import math
 import numbers
 from typing import Any
 
@@ -118,3 +119,21 @@ def whole_number(name: str, value: Any) -> int:
             or not isinstance(value, numbers.Integral) and not float(value).is_integer()):
         raise TypeError(f"{name} must be a whole number, got {type(value).__name__} {value!r:.40}")
     return int(value)
+
+
+def finite_number(name: str, value: Any) -> float:
+    """``value`` as a float if it is a finite real number; else TypeError (not a number, or
+    a bool) or ValueError (NaN, inf) naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__} {value!r:.40}")
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return float(value)
+
+
+def fraction(name: str, value: Any) -> float:
+    """``value`` as a float if it is a real number in [0, 1] (not a bool); else ValueError
+    naming ``name`` (NaN compares false with every threshold)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value <= 1:
+        raise ValueError(f"{name} must be a number in [0, 1], got {value!r:.40}")
+    return float(value)

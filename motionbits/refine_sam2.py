@@ -45,7 +45,7 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
-from motionbits.frames import whole_number
+from motionbits.frames import fraction, whole_number
 from motionbits.objects import check_label_map
 from motionbits.torch_threads import check_threads, torch_threads
 
@@ -90,13 +90,6 @@ def _count(name: str, value: Any, low: int) -> int:
     if n < low:
         raise ValueError(f"{name} must be >= {low}, got {value!r}")
     return n
-
-
-def _fraction(name: str, value: Any) -> float:
-    """``value`` as a float in [0, 1] (a NaN ``min_iou`` accepted every refined mask)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value <= 1:
-        raise ValueError(f"{name} must be a number in [0, 1], got {value!r:.40}")
-    return float(value)
 
 
 def _check_mask(name: str, mask: Any, shape: tuple[int, ...], of: str = "the label map") -> None:
@@ -229,7 +222,7 @@ def judge_refinement(refined: np.ndarray, motion: np.ndarray, static: np.ndarray
     _check_mask("static", static, motion.shape, "motion")
     if isinstance(band_px, bool) or not isinstance(band_px, numbers.Real) or not band_px >= 0:
         raise ValueError(f"band_px must be a number >= 0, got {band_px!r:.40}")  # NaN, inf: int() failed
-    min_iou, max_outside = _fraction("min_iou", min_iou), _fraction("max_outside", max_outside)
+    min_iou, max_outside = fraction("min_iou", min_iou), fraction("max_outside", max_outside)
     area = int(refined.sum())
     if area == 0:
         return "empty"
@@ -293,8 +286,8 @@ class Sam2Refiner:
         self.threads = check_threads(threads, "SAM2")
         self.model = model
         self.processor = processor
-        self.min_iou = _fraction("min_iou", min_iou)  # NaN accepted every refined mask
-        self.max_outside = _fraction("max_outside", max_outside)
+        self.min_iou = fraction("min_iou", min_iou)  # NaN accepted every refined mask
+        self.max_outside = fraction("max_outside", max_outside)
         self.totals: dict[str, Any] = {"frames": 0, "prompted": 0, "accepted": 0,
                                        "rejected": dict.fromkeys(REJECT_REASONS, 0)}
         self.last_stats: dict[str, Any] = {}

@@ -17,8 +17,6 @@ torch and ultralytics are imported only when a YOLOE model is built.
 """
 from __future__ import annotations
 
-import math
-import numbers
 import os
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -26,7 +24,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from motionbits.frames import as_rgb_array, whole_number
+from motionbits.frames import as_rgb_array, fraction, whole_number
 from motionbits.objects import Instance, check_mask, instance_from_mask
 
 from .base import Frame, MissingDependencyError, require
@@ -114,11 +112,6 @@ def _check_counts(min_area: Any, max_instances: Any) -> None:
         raise ValueError(f"min_area must be >= 0 pixels, got {min_area!r}")
     if max_instances is not None and whole_number("max_instances", max_instances) < 1:
         raise ValueError(f"max_instances must be >= 1 or None, got {max_instances!r}")
-
-
-def _check_fraction(name: str, value: Any) -> None:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (math.isfinite(value) and 0 <= value <= 1):
-        raise ValueError(f"{name} must be a number in [0, 1], got {value!r:.40}")
 
 
 @runtime_checkable
@@ -210,8 +203,8 @@ class YOLOEDetector:
         max_det: int = 100,
         device: str | None = None,
     ) -> None:
-        _check_fraction("conf", conf)  # else NaN, 5 or -1 reached ultralytics' predict on the first image
-        _check_fraction("iou", iou)
+        fraction("conf", conf)  # else NaN, 5 or -1 reached ultralytics' predict on the first image
+        fraction("iou", iou)
         if whole_number("imgsz", imgsz) < 1:
             raise ValueError(f"imgsz must be >= 1 pixel, got {imgsz!r}")
         if whole_number("max_det", max_det) < 1:

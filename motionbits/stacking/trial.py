@@ -20,14 +20,13 @@
 from __future__ import annotations
 
 import math
-import numbers
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from motionbits.frames import whole_number
+from motionbits.frames import finite_number, whole_number
 from motionbits.stacking.perception import (
     HeightMap,
     WorldGrasp,
@@ -77,24 +76,15 @@ class TrialConfig:
         if whole_number("min_mask_px", self.min_mask_px) < 0:
             raise ValueError(f"min_mask_px must be >= 0, got {self.min_mask_px}")
         for name in ("frame_dt", "push_speed", "transit_speed"):
-            if _number(name, getattr(self, name)) <= 0:
+            if finite_number(name, getattr(self, name)) <= 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
         for name in ("min_object_height", "finger_depth", "finger_margin", "carry_clearance", "settle_s"):
-            if _number(name, getattr(self, name)) < 0:
+            if finite_number(name, getattr(self, name)) < 0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         d = self.push_dist
         if (isinstance(d, (str, bytes)) or not isinstance(d, (tuple, list)) or len(d) != 2
-                or not 0 <= _number("push_dist", d[0]) <= _number("push_dist", d[1])):
+                or not 0 <= finite_number("push_dist", d[0]) <= finite_number("push_dist", d[1])):
             raise ValueError(f"push_dist must be (low, high) metres with 0 <= low <= high, got {d!r:.40}")
-
-
-def _number(name: str, value: object) -> float:
-    """``value`` as a float if it is a finite real number; else an error naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__} {value!r:.40}")
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return float(value)
 
 
 @dataclass

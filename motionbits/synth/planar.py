@@ -8,8 +8,6 @@ CLI and the test scenes of the segmenter.
 
 from __future__ import annotations
 
-import math
-import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -17,23 +15,13 @@ from typing import Any
 import cv2
 import numpy as np
 
-from motionbits.frames import whole_number
+from motionbits.frames import finite_number, whole_number
 
 __all__ = ["Polygon", "Body", "PlanarClip", "render_planar_clip", "demo_clip", "smooth_texture"]
 
 _SUPERSAMPLE = 2  # render at 2x and downsample: anti-aliased edges like a real camera
 MAX_FRAME_PIXELS = 4096 * 4096  # H x W of one frame (rendered at 2x: ~2 GB of body layers)
 MAX_CLIP_PIXELS = 2 ** 28  # n_frames x H x W (frames and labels: 7 bytes a pixel, ~1.9 GB)
-
-
-def _finite(name: str, value: Any) -> float:
-    """``value`` as a float if it is a finite real number; else a one-line error naming ``name``
-    (NaN or inf made a body vanish, or the frames noise)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__} {value!r:.40}")
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return float(value)
 
 
 def _check_size(size: Any) -> tuple[int, int]:
@@ -62,7 +50,7 @@ class Polygon:
         if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 3:  # else OpenCV's fillPoly assertion
             raise ValueError(f"a Polygon's points must be at least 3 (x, y) pairs, got {self.points!r:.60}")
         for v in pts.ravel():  # drawn as int32 at 2x: 1e12 wrapped (and took 15 s)
-            if abs(_finite("a Polygon's point coordinate", v)) > 1e9:
+            if abs(finite_number("a Polygon's point coordinate", v)) > 1e9:
                 raise ValueError(f"a Polygon's point coordinate must be within +-1e9 px, got {v!r}")
         if whole_number("texture_seed", self.texture_seed) < 0:
             raise ValueError(f"texture_seed must be >= 0, got {self.texture_seed}")
@@ -101,14 +89,14 @@ class Body:
         if (isinstance(self.polygons, (str, bytes)) or not isinstance(self.polygons, Sequence)
                 or not self.polygons or not all(isinstance(p, Polygon) for p in self.polygons)):
             raise TypeError(f"a Body's polygons must be a non-empty tuple of Polygon, got {self.polygons!r:.60}")
-        _finite("omega", self.omega)
+        finite_number("omega", self.omega)
         for name, pair in (("velocity", self.velocity), ("pivot", self.pivot)):
             if pair is None and name == "pivot":
                 continue
             if isinstance(pair, (str, bytes)) or not isinstance(pair, Sequence) or len(pair) != 2:
                 raise ValueError(f"{name} must be an (x, y) pair, got {pair!r:.40}")
             for v in pair:
-                _finite(name, v)
+                finite_number(name, v)
         whole_number("start", self.start)  # 1.5 started the motion between frames
         if self.stop is not None:
             whole_number("stop", self.stop)
@@ -209,7 +197,7 @@ def render_planar_clip(bodies: list[Body] | tuple[Body, ...], *, size: tuple[int
     h, w = _check_size(size)
     if whole_number("seed", seed) < 0:  # else numpy's "expected non-negative integer"
         raise ValueError(f"seed must be >= 0, got {seed}")
-    if _finite("noise", noise) < 0:  # NaN and inf noise gave black / saturated frames
+    if finite_number("noise", noise) < 0:  # NaN and inf noise gave black / saturated frames
         raise ValueError(f"noise must be >= 0, got {noise}")
     if n_frames * h * w > MAX_CLIP_PIXELS:  # else a MemoryError (or swapping) part-way
         raise ValueError(f"n_frames x height x width must be at most {MAX_CLIP_PIXELS:,} pixels "
