@@ -224,6 +224,27 @@ def test_a_mark_that_stands_as_first_seen_is_found_and_a_moved_body_is_not():
     assert first.as_first_seen(np.zeros_like(labels), now).size == 0
 
 
+def test_a_mark_first_seen_in_part_and_a_little_changed_still_stands_as_first_seen():
+    """A static block read as moving (parallax) whose first look knows 40% of it (the rest
+    first seen under a hand) and of that 7% changed (a small sticker, say) stands as first
+    seen; with 12.5% changed, as much as a block nudged 1-2 cm changes, it does not."""
+    table = _table(5)
+    first_rgb = table.copy()
+    first_rgb[40:140, 40:140] = (30, 30, 160)
+    first = _first_look(first_rgb, np.s_[40:140, 80:140])
+    labels = np.zeros((240, 320), np.int32)
+    labels[40:140, 40:140] = 3
+    mark = labels == 3
+    everywhere = (slice(0, 240), slice(0, 320))
+    assert first.known[mark].mean() == 0.4
+    for side, share, found in ((6, (0.06, 0.08), [3]), (14, (0.11, 0.14), [])):
+        now = first_rgb.copy()
+        now[60:60 + side, 50:50 + side] = (200, 200, 40)
+        changed = first.changed(now, everywhere)[mark].sum() / first.known[mark].sum()
+        assert share[0] < changed < share[1]
+        assert first.as_first_seen(labels, now).tolist() == found
+
+
 def test_a_mark_left_on_the_table_a_block_was_lifted_from_is_found_uncovered():
     """A block at rest when first seen is lifted away; a MotionBit born in its wake (the
     flow smeared there) stays on the table it left: that mark shows the table around it
