@@ -208,6 +208,8 @@ class CameraMotion(NamedTuple):
     #: (H, W, 2) float32, where each pixel of the static world was in the previous frame
     #: (the homography and its parallax, :func:`world_maps`); None: no camera motion.
     world: np.ndarray | None = None
+    #: (3,) homogeneous epipole of the static world's parallax; None: none found.
+    epipole: np.ndarray | None = None
 
 
 def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: np.ndarray,
@@ -245,10 +247,11 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     Returns:
         :class:`CameraMotion`: the backward flow (H, W, 2), the previous frame and the
         nodes' backward targets (n, 2) relative to the static world (homography and
-        parallax; 0 flow where the view just entered), the camera's 3x3 homography and
-        the static world's (H, W, 2) map to the previous frame -- ``flow_back``, ``prev``,
-        ``back_points``, None, None (the same objects) when
-        no camera motion is found.
+        parallax; 0 flow where the view just entered), the camera's 3x3 homography, the
+        static world's (H, W, 2) map to the previous frame and the parallax's (3,)
+        epipole (None where no parallax is found) -- ``flow_back``, ``prev``,
+        ``back_points``, None, None, None (the same objects) when no camera motion is
+        found.
     """
     if support >= 1.0:
         return CameraMotion(flow_back, prev, back_points, None)
@@ -292,4 +295,5 @@ def compensate_camera(points: np.ndarray, back_points: np.ndarray, reliability: 
     entered = ((maps[..., 0] < 0) | (maps[..., 0] > wd - 1) | (maps[..., 1] < 0)
                | (maps[..., 1] > ht - 1))
     flow_m[entered] = 0.0
-    return CameraMotion(flow_m, prev_m, points + sample_bilinear(flow_m, points), cam, maps)
+    return CameraMotion(flow_m, prev_m, points + sample_bilinear(flow_m, points), cam, maps,
+                        None if par is None else par[2])

@@ -25,12 +25,25 @@ import numpy as np
 from motionbits.boxes import pieces_holding
 from motionbits.flow import pixel_grid
 
-__all__ = ["epipolar_distance", "fit_epipole", "parallax_field"]
+__all__ = ["epipolar_distance", "fit_epipole", "parallax_field", "along_epipolar_lines",
+           "ParallaxOnly", "ALONG_MIN_PX", "ALONG_MIN_NODES", "ALONG_SINE", "PARALLAX_FRAMES"]
 
 #: RANSAC hypotheses (node pairs) tried for the epipole; fixed seed, so runs repeat.
 EPIPOLE_ITERS = 200
 #: Gaussian sigma of the interpolated parallax, in multiples of the image's longer side.
 SMOOTH_FRACTION = 0.03
+#: A MotionBit moves along its epipolar lines at a frame when, over those of its nodes
+#: that moved more than this many px relative to the static world's model ...
+ALONG_MIN_PX = 2.0
+#: ... (at least this many nodes; else the frame does not count) ...
+ALONG_MIN_NODES = 4
+#: ... the median of (px off the epipolar line / px moved) is below this (about 3 degrees:
+#: a tall static cylinder read through parallax, 0.01-0.03 at its 7 such frames; bodies
+#: carried or pushed under a moving camera, 0.06-0.29 at one such frame at least) ...
+ALONG_SINE = 0.05
+#: ... and it is a static body read through parallax once it moved so at this many such
+#: frames and at no such frame otherwise (:class:`ParallaxOnly`).
+PARALLAX_FRAMES = 3
 
 
 def _homogeneous(p: np.ndarray) -> np.ndarray:
@@ -153,3 +166,67 @@ def parallax_field(residual: np.ndarray, e: np.ndarray, region: np.ndarray, *,
     smooth *= cv2.resize(np.minimum(weight / 0.05, 1.0), (w, h))[..., None]  # no support: 0
     return np.where(fits[..., None], own,
                     np.where(region[..., None], smooth, 0)).astype(np.float32)
+
+
+def along_epipolar_lines(points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
+                         ids, e: np.ndarray) -> dict[int, bool]:
+    """Which MotionBits move along the epipolar lines of ``e`` at this frame.
+
+    Args:
+        points, residual: (n, 2) node positions and their motion relative to the static
+            world's model (the camera's homography and the parallax found).
+        node_ids: (n,) int MotionBit id of each node (0 = none).
+        ids: the MotionBit ids to judge.
+        e: (3,) homogeneous epipole (:func:`fit_epipole`).
+
+    Returns:
+        id -> whether the median of (px off the epipolar line / px moved) over its nodes
+        that moved more than ``ALONG_MIN_PX`` is below ``ALONG_SINE``, for the ids with
+        ``ALONG_MIN_NODES`` such nodes or more.
+    """
+    size = np.linalg.norm(residual, axis=1)
+    fast = size > ALONG_MIN_PX
+    if not fast.any():
+        return {}
+    off = epipolar_distance(points[fast], residual[fast], e)[0] / size[fast]
+    out = {}
+    for i in ids:
+        mine = node_ids[fast] == i
+        if np.count_nonzero(mine) >= ALONG_MIN_NODES:
+            out[int(i)] = bool(np.median(off[mine]) < ALONG_SINE)
+    return out
+
+
+class ParallaxOnly:
+    """The MotionBits whose motion has only ever been the static world's parallax.
+
+    Parallax is looked for in the regions that reach the image's border (``fit_parallax``
+    in ``motionbits/camera.py``), so a tall static body standing on the table, bounded by
+    the table's plane, keeps its parallax as motion and is born as a MotionBit. Its motion
+    lies along the epipolar lines at every frame, as the camera moves on; a body that moves
+    by itself leaves them at some frame (a body moved exactly along them is the blind spot
+    of plane + parallax, README "Moving cameras", round 36). Per MotionBit this counts the
+    frames at which an epipole was known and it moved measurably
+    (:func:`along_epipolar_lines`), and how many of those along the lines.
+    """
+
+    def __init__(self) -> None:
+        self._frames: dict[int, tuple[int, int]] = {}  # id -> (measured, along the lines)
+
+    def observe(self, points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
+                moving, e: np.ndarray) -> None:
+        """Count this frame for the MotionBits ``moving`` (arguments as
+        :func:`along_epipolar_lines`)."""
+        for i, along in along_epipolar_lines(points, residual, node_ids, moving, e).items():
+            measured, lined = self._frames.get(i, (0, 0))
+            self._frames[i] = (measured + 1, lined + along)
+
+    def ids(self, present) -> set[int]:
+        """Of the ids ``present``, those that moved along the epipolar lines at
+        ``PARALLAX_FRAMES`` measured frames or more and never otherwise."""
+        out = set()
+        for i in present:
+            measured, lined = self._frames.get(int(i), (0, 0))
+            if measured >= PARALLAX_FRAMES and lined == measured:
+                out.add(int(i))
+        return out

@@ -43,6 +43,7 @@ from motionbits.merging import (MIN_MOVED, MotionBitGroups, drop_seen_still, obs
                                 seen_still, standing_still)
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
+from motionbits.parallax import ParallaxOnly
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
@@ -183,6 +184,7 @@ class MotionBitsSegmenter:
         self._rest_marks = RestingMarks()  # the marks shown at the last frame (resting.py)
         self._camera_moved = False  # the camera's motion was found at the last frame (parallax)
         self._resting: set[int] = set()  # ids at rest at the last frame
+        self._parallax = ParallaxOnly()  # MotionBits moved only along epipolar lines
         if self._work_size is None:  # sized at the stream's first frame (_start)
             self._labels = self._earned = self._still = self._joined = None
             self._temporal = self._memory = self._arrivals = self._first_look = None
@@ -328,7 +330,7 @@ class MotionBitsSegmenter:
             reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow (but those at rest)
-            flow_m, prev_m, back_pts, cam, world = compensate_camera(
+            flow_m, prev_m, back_pts, cam, world, epipole = compensate_camera(
                 pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
                 threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
                 parallax=cfg.camera_parallax, grid_shape=(grid.rows, grid.cols),
@@ -467,6 +469,8 @@ class MotionBitsSegmenter:
 
         with self._stage("merging"):
             self._spans.record(moving, self.frame_index)
+            if epipole is not None:
+                self._parallax.observe(pts, back_pts - pts, node_ids, moving, epipole)
             # when each node never in a MotionBit was last seen standing still (+1; 0: never)
             still_before = np.where(hist_nodes == 0, still_seen[ix[:, 1], ix[:, 0]], 0)
             observe_touching(self._groups, grid, labels, node_ids, ids, thetas, trans, moving,
@@ -492,7 +496,10 @@ class MotionBitsSegmenter:
             # next frame (a solid body found at rest where the static world was, at once)
             shown = {r for i, r in rep.items()
                      if i not in self._tentative and i not in self._setdown.held_back}
-            rep = {i: r if r in shown else 0 for i, r in rep.items()}
+            # ... and never a MotionBit whose motion has only been the static world's
+            # parallax (a tall static body under a moving camera)
+            static = self._parallax.ids(present)
+            rep = {i: r if r in shown and i not in static else 0 for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
             self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))

@@ -43,7 +43,7 @@ def test_compensate_camera_recovers_a_shift_and_ignores_identity():
     assert still.world is None
     q = p + shift
     q[:40] += 6.0  # a moving body, 10% of the nodes
-    flow_m, prev_m, back_m, cam, world = compensate_camera(p, q, ok, flow, prev, **kw)
+    flow_m, prev_m, back_m, cam, world, _ = compensate_camera(p, q, ok, flow, prev, **kw)
     assert cam is not None and np.allclose(cam[:2, 2], shift, atol=0.05)
     # where each pixel of the static world was in the previous frame
     ys, xs = np.mgrid[:h, :w].astype(np.float32)

@@ -4,7 +4,9 @@ import numpy as np
 
 from motionbits.camera import compensate_camera
 from motionbits.nodes import NodeGrid
-from motionbits.parallax import epipolar_distance, fit_epipole, parallax_field
+from motionbits.parallax import (ALONG_MIN_PX, PARALLAX_FRAMES, ParallaxOnly,
+                                 along_epipolar_lines, epipolar_distance, fit_epipole,
+                                 parallax_field)
 
 H, W = 120, 160
 E = np.array([70.0, 50.0])  # the epipole (image of the other camera centre)
@@ -68,8 +70,8 @@ def test_parallax_field_keeps_aligned_residual_and_interpolates_the_rest():
 def test_compensation_removes_the_background_parallax_but_not_the_moving_body():
     flow, band, body = _world(0.06, np.array([0.0, 4.0]))
     off = _compensate(flow, parallax=1.0)[0]  # homography only
-    on, _, _, cam, _ = _compensate(flow, parallax=0.1)
-    assert cam is not None
+    on, _, _, cam, _, epipole = _compensate(flow, parallax=0.1)
+    assert cam is not None and np.allclose(epipole[:2] / epipole[2], E, atol=2.0)
     inner = band.copy()
     inner[:, :6] = inner[:, -6:] = inner[:4] = False  # away from the edges
     assert np.median(np.linalg.norm(off[inner], axis=-1)) > 2.0
@@ -214,24 +216,73 @@ def _moving_camera_clip(epipole, gamma, body_motion, n_frames=8, size=(240, 320)
     return frames, mask, band
 
 
+def _best_iou(labels: np.ndarray, mask: np.ndarray) -> float:
+    ids, counts = np.unique(labels[mask], return_counts=True)
+    if not (ids > 0).any():
+        return 0.0
+    best = ids[ids > 0][np.argmax(counts[ids > 0])]
+    return (mask & (labels == best)).sum() / (mask | (labels == best)).sum()
+
+
 def test_a_block_pushed_along_its_epipolar_lines_is_a_motionbit():
     # the camera translates with its epipole far above the image (an orbit's), the block
     # is pushed 1.5 px a frame toward it: along its epipolar lines, as the static world's
     # parallax would move. Until round 29 such motion was no evidence at birth and the
-    # block never got a mark; the band's parallax must still give none.
+    # block never got a MotionBit; the band's parallax must still give none.
     from motionbits import MotionBitsSegmenter
 
     epipole = np.array([160.0, -300.0])
-    toward = 1.5 * (epipole - 150.0) / np.linalg.norm(epipole - 150.0)
-    frames, block, band = _moving_camera_clip(epipole, 0.012, toward)
+    toward = (epipole - 150.0) / np.linalg.norm(epipole - 150.0)
+    frames, block, band = _moving_camera_clip(epipole, 0.012, 1.5 * toward)
     seg = MotionBitsSegmenter()
     for frame in frames:
         labels = seg.update(frame).labels
     assert seg._camera_moved  # the camera's motion was found
-    ids, counts = np.unique(labels[block], return_counts=True)
-    best = ids[ids > 0][np.argmax(counts[ids > 0])] if (ids > 0).any() else 0
-    assert best, "the pushed block has no MotionBit"
-    iou = (block & (labels == best)).sum() / (block | (labels == best)).sum()
-    assert iou > 0.5
+    import cv2
+
+    state = cv2.resize(seg._labels, block.shape[::-1], interpolation=cv2.INTER_NEAREST)
+    assert _best_iou(state, block) > 0.5, "the pushed block has no MotionBit"
+    # ... but moved exactly along its epipolar lines at all its 7 frames, it moves as a
+    # tall static body's parallax would: the blind spot of plane + parallax, not shown
+    # (parallax.ParallaxOnly, round 36)
+    assert _best_iou(labels, block) == 0.0
+    assert (labels[band] > 0).mean() < 0.01  # the parallax band: no mark
+    # pushed 10 degrees off its lines, it is a MotionBit and shown
+    c, s = np.cos(np.radians(10)), np.sin(np.radians(10))
+    off = 1.5 * np.array([c * toward[0] - s * toward[1], s * toward[0] + c * toward[1]])
+    frames, block, band = _moving_camera_clip(epipole, 0.012, off)
+    seg = MotionBitsSegmenter()
+    for frame in frames:
+        labels = seg.update(frame).labels
+    assert _best_iou(labels, block) > 0.5, "the pushed block is not shown"
     assert (labels[band] > 0).mean() < 0.01  # the parallax band: no mark
     assert (labels[~band & ~block] > 0).mean() < 0.02  # the table: none beyond the block's edge
+
+
+def test_a_motionbit_moved_only_along_its_epipolar_lines_is_parallax_only():
+    """A tall static body under a translating camera moves along its epipolar lines at
+    every frame; a pushed block leaves them at some frame; nodes that barely move, or
+    too few of them, do not count."""
+    rng = np.random.default_rng(3)
+    p = rng.uniform([0, 0], [W, H], (60, 2))
+    e = np.array([*E, 1.0])
+    node_ids = np.repeat([1, 2, 3], 20)
+    tall = 0.08 * (p - E)  # parallax: along the line through p and E
+    tall += rng.normal(0, 0.02, tall.shape)
+    parallax = ParallaxOnly()
+    for frame in range(PARALLAX_FRAMES):
+        residual = tall.copy()
+        # body 2: pushed along its lines at every frame but the last, then across them
+        across = np.stack([-(p[:, 1] - E[1]), p[:, 0] - E[0]], 1)
+        across *= 3.0 / np.linalg.norm(across, axis=1, keepdims=True)
+        if frame == PARALLAX_FRAMES - 1:
+            residual[20:40] = across[20:40]
+        residual[40:] = 0.5 * ALONG_MIN_PX * (p[40:] - E) / np.linalg.norm(
+            p[40:] - E, axis=1, keepdims=True)  # body 3: too slow to tell
+        along = along_epipolar_lines(p, residual, node_ids, [1, 2, 3], e)
+        assert along[1] and 3 not in along
+        assert along[2] == (frame < PARALLAX_FRAMES - 1)
+        parallax.observe(p, residual, node_ids, {1, 2, 3}, e)
+        assert parallax.ids([1, 2, 3]) == ({1} if frame == PARALLAX_FRAMES - 1 else set())
+    # a body that is not present is not reported
+    assert parallax.ids([2, 3]) == set()

@@ -151,11 +151,12 @@ def test_compensate_camera_removes_a_global_shift():
     assert off[0] is flow and off[1] is prev and off[2] is back and off[3] is None
     flow[...] = (3.0, -2.0)
     back = grid.points + np.array([3.0, -2.0], np.float32)
-    flow_m, prev_m, back_m, cam, world = compensate_camera(
+    flow_m, prev_m, back_m, cam, world, epipole = compensate_camera(
         grid.points, back, np.ones(grid.n), flow, prev, support=0.5, threshold=1.0,
         min_shift=0.25)
     assert cam is not None and prev_m.shape == prev.shape
     assert world is not None  # the static world's map (a pure shift: no parallax)
+    assert epipole is None
     assert np.abs(flow_m).max() < 1e-3 and np.abs(back_m - grid.points).max() < 1e-3
 
 
