@@ -19,6 +19,8 @@ or misaligned body is measured against its surroundings' parallax, not erased); 
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import cv2
 import numpy as np
 
@@ -169,7 +171,7 @@ def parallax_field(residual: np.ndarray, e: np.ndarray, region: np.ndarray, *,
 
 
 def along_epipolar_lines(points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
-                         ids, e: np.ndarray) -> dict[int, bool]:
+                         ids: Iterable[int], e: np.ndarray) -> dict[int, bool]:
     """Which MotionBits move along the epipolar lines of ``e`` at this frame.
 
     Args:
@@ -214,14 +216,14 @@ class ParallaxOnly:
         self._frames: dict[int, tuple[int, int]] = {}  # id -> (measured, along the lines)
 
     def observe(self, points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
-                moving, e: np.ndarray) -> None:
+                moving: Iterable[int], e: np.ndarray) -> None:
         """Count this frame for the MotionBits ``moving`` (arguments as
         :func:`along_epipolar_lines`)."""
         for i, along in along_epipolar_lines(points, residual, node_ids, moving, e).items():
             measured, lined = self._frames.get(i, (0, 0))
             self._frames[i] = (measured + 1, lined + along)
 
-    def ids(self, present) -> set[int]:
+    def ids(self, present: Iterable[int]) -> set[int]:
         """Of the ids ``present``, those that moved along the epipolar lines at
         ``PARALLAX_FRAMES`` measured frames or more and never otherwise."""
         out = set()
