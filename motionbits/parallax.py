@@ -191,9 +191,10 @@ def along_epipolar_lines(points: np.ndarray, residual: np.ndarray, node_ids: np.
     if not fast.any():
         return {}
     off = epipolar_distance(points[fast], residual[fast], e)[0] / size[fast]
+    owner = node_ids[fast]
     out = {}
     for i in ids:
-        mine = node_ids[fast] == i
+        mine = owner == i
         if np.count_nonzero(mine) >= ALONG_MIN_NODES:
             out[int(i)] = bool(np.median(off[mine]) < ALONG_SINE)
     return out
