@@ -1,0 +1,155 @@
+"""The numbers the marks are shown under: a body keeps its number from frame to frame.
+
+The segmenter groups its MotionBits anew at every frame and names each group after its
+oldest member (:meth:`motionbits.merging.MotionBitGroups.representatives`). That name
+changes while the body stays: the oldest member retires, a piece joins or leaves, the
+greedy grouping comes out differently. A vision-language model shown mark "1" that
+becomes "273" and back cannot follow the body. So the result shows each group under a
+*number* that its members carry from frame to frame:
+
+- each MotionBit remembers the number it was shown under at the last frame;
+- a shown group inherits the numbers of its members, weighed by their pixels now, the
+  heaviest first, each number and each group once: when a group splits, the bigger part
+  keeps the number; when two join, the larger part's number wins; when the oldest member
+  retires, the others keep the number;
+- a group that inherits none takes the number of a mark shown at the last frame and gone
+  now whose pixels it covers (``REBORN_IOU``: a MotionBit retired and born again on the
+  same body in one frame), else its representative's id if no other mark holds it, else
+  a fresh id from the segmenter's counter (never any MotionBit's id, past or future).
+
+Only the output is renumbered (:func:`renumber`); the segmenter's state keeps the
+representatives' ids.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from motionbits.boxes import label_areas
+from motionbits.records import MotionBitsResult, group_map
+
+__all__ = ["REBORN_IOU", "ShownNumbers", "inherited_weights", "match_greedy", "mask_ious",
+           "renumber"]
+
+#: A mark that inherits no number takes that of a mark shown at the last frame and gone
+#: now when their masks overlap by this IoU: the same body marked again (a MotionBit
+#: retired and another born on its pixels in one frame). 0.5: each mask is then more the
+#: other's than anything else's (the usual "same object" match).
+REBORN_IOU = 0.5
+
+
+def inherited_weights(areas: np.ndarray, rep: dict[int, int], last: dict[int, int]
+                      ) -> dict[tuple[int, int], int]:
+    """How strongly each shown group claims each number its members had.
+
+    Args:
+        areas: (max id + 1,) int px of each MotionBit id now (:func:`label_areas`).
+        rep: id -> the label of the group it is shown under (0 = not shown).
+        last: id -> the number it was shown under at the last frame.
+
+    Returns:
+        (number, group label) -> px now of the group's members that had that number.
+    """
+    weights: dict[tuple[int, int], int] = {}
+    for i, r in rep.items():
+        if r and i in last:
+            key = (last[i], r)
+            weights[key] = weights.get(key, 0) + int(areas[i] if i < areas.size else 0)
+    return weights
+
+
+def match_greedy(weights: dict[tuple[int, int], float]) -> dict[int, int]:
+    """Group label -> number: the pairs taken largest weight first, each number and each
+    group at most once (ties: the smaller number, then the smaller label, first).
+
+    Args:
+        weights: (number, group label) -> weight.
+    """
+    numbers: dict[int, int] = {}
+    taken: set[int] = set()
+    for (d, r), _ in sorted(weights.items(), key=lambda kv: (-kv[1], kv[0])):
+        if r not in numbers and d not in taken:
+            numbers[r] = d
+            taken.add(d)
+    return numbers
+
+
+def mask_ious(now: np.ndarray, before: np.ndarray) -> dict[tuple[int, int], float]:
+    """IoU of every pair of overlapping labels of two label maps.
+
+    Args:
+        now, before: (H, W) int32 label maps of one size (0 = background).
+
+    Returns:
+        (label in ``before``, label in ``now``) -> IoU of their masks, for the pairs that
+        share a pixel.
+    """
+    both = (now > 0) & (before > 0)
+    if not both.any():
+        return {}
+    k = int(now.max()) + 1
+    pairs, shared = np.unique(before[both].astype(np.int64) * k + now[both],
+                              return_counts=True)
+    area_now, area_before = label_areas(now), label_areas(before)
+    return {(d, r): n / (area_before[d] + area_now[r] - n)
+            for d, r, n in zip(*(x.tolist() for x in np.divmod(pairs, k)), shared.tolist())}
+
+
+def renumber(result: MotionBitsResult, numbers: dict[int, int]) -> MotionBitsResult:
+    """``result`` with each label ``r`` shown as ``numbers[r]``: its ``labels``, its
+    ``node_labels`` (a node of a group not shown, absent from ``numbers``, becomes 0) and
+    its records' ids (sorted by the new ids)."""
+    records = sorted((replace(mb, id=numbers[mb.id]) for mb in result.motionbits),
+                     key=lambda mb: mb.id)
+    return replace(result, labels=group_map(result.labels, numbers), motionbits=records,
+                   node_labels=group_map(result.node_labels, numbers))
+
+
+class ShownNumbers:
+    """The numbers the marks of one shot are shown under (module docstring).
+
+    State: the number each MotionBit id was shown under at the last frame, and that
+    frame's shown label map as numbered. A new shot starts a new instance.
+    """
+
+    def __init__(self) -> None:
+        self._last: dict[int, int] = {}  # MotionBit id -> its number at the last frame
+        self._shown: np.ndarray | None = None  # (h, w) int32 the last frame's marks, numbered
+
+    def assign(self, shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
+               next_id: int) -> tuple[dict[int, int], int]:
+        """The number of each mark shown at this frame; remembered for the next.
+
+        Args:
+            shown: (h, w) int32 the marks shown, under their group labels (0 = none).
+            state: (h, w) int32 the MotionBit ids the groups are made of, same size.
+            rep: id -> the group label it is shown under (0 = not shown), every id
+                present.
+            next_id: the first id not yet given to any MotionBit or number.
+
+        Returns:
+            group label -> number for each label in ``shown`` (the numbers are distinct
+            and > 0), and the next free id (past the fresh numbers given).
+        """
+        groups = set((np.flatnonzero(label_areas(shown)[1:]) + 1).tolist())
+        weights = inherited_weights(label_areas(state), rep, self._last)
+        numbers = match_greedy({(d, r): w for (d, r), w in weights.items() if r in groups})
+        orphans = groups - numbers.keys()
+        if orphans and self._shown is not None:
+            gone = set((np.flatnonzero(label_areas(self._shown)[1:]) + 1).tolist()) - set(
+                numbers.values())
+            numbers.update(match_greedy({
+                (d, r): iou for (d, r), iou in mask_ious(shown, self._shown).items()
+                if r in orphans and d in gone and iou >= REBORN_IOU}))
+        taken = set(numbers.values())
+        for r in sorted(groups - numbers.keys()):
+            number = r
+            if r in taken:  # another mark holds it: a fresh number
+                number, next_id = next_id, next_id + 1
+            numbers[r] = number
+            taken.add(number)
+        self._last = {i: numbers[r] for i, r in rep.items() if r in numbers}
+        self._shown = group_map(shown, numbers)
+        return numbers, next_id
