@@ -43,6 +43,7 @@ from motionbits.merging import (MIN_MOVED, MotionBitGroups, drop_seen_still, obs
                                 seen_still, standing_still)
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
+from motionbits.numbering import ShownNumbers, renumber
 from motionbits.parallax import ParallaxOnly
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
@@ -182,6 +183,7 @@ class MotionBitsSegmenter:
         self._groups = MotionBitGroups(self.config.merge_agree, self.config.merge_disagree)
         self._cuts = CutMemory()  # the marks at rest completed at the last frame
         self._rest_marks = RestingMarks()  # the marks shown at the last frame (resting.py)
+        self._numbers = ShownNumbers()  # the numbers the marks are shown under (numbering.py)
         self._camera_moved = False  # the camera's motion was found at the last frame (parallax)
         self._resting: set[int] = set()  # ids at rest at the last frame
         self._parallax = ParallaxOnly()  # MotionBits moved only along epipolar lines
@@ -563,6 +565,11 @@ class MotionBitsSegmenter:
             shown = hide_thin(shown, int(np.ceil(max(grid.cell))))
             result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
                                   moving, rep, source, self._spans, grid, self._input_size)
+            # each mark under the number its body was shown under (the state keeps the
+            # groups' representatives)
+            numbers, self._next_id = self._numbers.assign(shown, with_links, rep,
+                                                          self._next_id)
+            result = renumber(result, numbers)
         result.timings = dict(self._timings)
         return result
 
