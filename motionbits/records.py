@@ -28,9 +28,12 @@ class MotionBitsResult:
 
     Attributes:
         frame_index: 0-based index of the frame in the stream.
-        labels: (H, W) int32 at the input size; 0 = background, k > 0 = MotionBit k.
-        motionbits: one record per id present in ``labels``.
-        node_labels: (rows, cols) int32 MotionBit id of every grid node (0 = none).
+        labels: (H, W) int32 at the input size; 0 = background, k > 0 = the mark
+            numbered k (a body keeps its number from frame to frame:
+            :mod:`motionbits.numbering`).
+        motionbits: one record per id present in ``labels``, by id.
+        node_labels: (rows, cols) int32 the number of the mark each grid node is in (0 =
+            none, or a mark not shown).
         timings: milliseconds spent per stage (see ``STAGES``).
     """
 
