@@ -7,15 +7,18 @@ greedy grouping comes out differently. A vision-language model shown mark "1" th
 becomes "273" and back cannot follow the body. So the result shows each group under a
 *number* that its members carry from frame to frame:
 
-- each MotionBit remembers the number it was shown under at the last frame;
+- each MotionBit remembers the number it was last shown under, for as long as it lives;
 - a shown group inherits the numbers of its members, weighed by their pixels now, the
   heaviest first, each number and each group once: when a group splits, the bigger part
   keeps the number; when two join, the larger part's number wins; when the oldest member
-  retires, the others keep the number;
-- a group that inherits none takes the number of a mark shown at the last frame and gone
-  now whose pixels it covers (``REBORN_IOU``: a MotionBit retired and born again on the
-  same body in one frame), else its representative's id if no other mark holds it, else
-  a fresh id from the segmenter's counter (never any MotionBit's id, past or future).
+  retires, the others keep the number. Numbers shown at the last frame go first; then a
+  group still without one takes a free number its members had earlier (a mark hidden
+  for some frames -- too small, or held back -- comes back under its number);
+- a group that inherits none takes the number of a mark shown at one of the last
+  ``RECENT_FRAMES`` frames and gone now whose pixels it covers (``REBORN_IOU``: a
+  MotionBit retired and another born on the same body), the latest first, else its
+  representative's id if no other mark holds it, else a fresh id from the segmenter's
+  counter (never any MotionBit's id, past or future).
 
 Only the output is renumbered (:func:`renumber`); the segmenter's state keeps the
 representatives' ids.
@@ -23,6 +26,7 @@ representatives' ids.
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import replace
 
 import numpy as np
@@ -30,7 +34,7 @@ import numpy as np
 from motionbits.boxes import label_areas
 from motionbits.records import MotionBitsResult, group_map
 
-__all__ = ["REBORN_IOU", "ShownNumbers", "inherited_weights", "match_greedy", "mask_ious",
+__all__ = ["REBORN_IOU", "RECENT_FRAMES", "ShownNumbers", "inherited_weights", "match_greedy", "mask_ious",
            "renumber"]
 
 #: A mark that inherits no number takes that of a mark shown at the last frame and gone
@@ -38,6 +42,10 @@ __all__ = ["REBORN_IOU", "ShownNumbers", "inherited_weights", "match_greedy", "m
 #: retired and another born on its pixels in one frame). 0.5: each mask is then more the
 #: other's than anything else's (the usual "same object" match).
 REBORN_IOU = 0.5
+#: ... shown at one of this many last frames (a body whose MotionBit retired is often
+#: marked again a few frames later: on ``02_cups.mp4`` most such marks came back within
+#: 2-10 frames).
+RECENT_FRAMES = 10
 
 
 def inherited_weights(areas: np.ndarray, rep: dict[int, int], last: dict[int, int]
@@ -110,13 +118,16 @@ def renumber(result: MotionBitsResult, numbers: dict[int, int]) -> MotionBitsRes
 class ShownNumbers:
     """The numbers the marks of one shot are shown under (module docstring).
 
-    State: the number each MotionBit id was shown under at the last frame, and that
-    frame's shown label map as numbered. A new shot starts a new instance.
+    State: the number each living MotionBit id was last shown under (and whether that
+    was at the last frame), and the shown label maps of the last ``RECENT_FRAMES``
+    frames, numbered. A new shot starts a new instance.
     """
 
     def __init__(self) -> None:
         self._last: dict[int, int] = {}  # MotionBit id -> its number at the last frame
-        self._shown: np.ndarray | None = None  # (h, w) int32 the last frame's marks, numbered
+        self._earlier: dict[int, int] = {}  # id -> its number, last shown before that
+        # (h, w) int32 the marks shown at the last frames, numbered, the latest last
+        self._recent: deque[np.ndarray] = deque(maxlen=RECENT_FRAMES)
 
     def assign(self, shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
                next_id: int) -> tuple[dict[int, int], int]:
@@ -134,15 +145,20 @@ class ShownNumbers:
             and > 0), and the next free id (past the fresh numbers given).
         """
         groups = set((np.flatnonzero(label_areas(shown)[1:]) + 1).tolist())
-        weights = inherited_weights(label_areas(state), rep, self._last)
-        numbers = match_greedy({(d, r): w for (d, r), w in weights.items() if r in groups})
-        orphans = groups - numbers.keys()
-        if orphans and self._shown is not None:
-            gone = set((np.flatnonzero(label_areas(self._shown)[1:]) + 1).tolist()) - set(
-                numbers.values())
+        areas = label_areas(state)
+        numbers: dict[int, int] = {}
+        for memory in (self._last, self._earlier):  # the last frame's claims first
+            taken = set(numbers.values())
             numbers.update(match_greedy({
-                (d, r): iou for (d, r), iou in mask_ious(shown, self._shown).items()
-                if r in orphans and d in gone and iou >= REBORN_IOU}))
+                (d, r): w for (d, r), w in inherited_weights(areas, rep, memory).items()
+                if r in groups and r not in numbers and d not in taken}))
+        for before in reversed(self._recent):  # reborn: the latest frame first
+            orphans, taken = groups - numbers.keys(), set(numbers.values())
+            if not orphans:
+                break
+            numbers.update(match_greedy({
+                (d, r): iou for (d, r), iou in mask_ious(shown, before).items()
+                if r in orphans and d not in taken and iou >= REBORN_IOU}))
         taken = set(numbers.values())
         for r in sorted(groups - numbers.keys()):
             number = r
@@ -150,6 +166,10 @@ class ShownNumbers:
                 number, next_id = next_id, next_id + 1
             numbers[r] = number
             taken.add(number)
+        self._earlier = {i: self._last.get(i, self._earlier.get(i)) for i in rep
+                         if i in self._last or i in self._earlier}  # the living only
         self._last = {i: numbers[r] for i, r in rep.items() if r in numbers}
-        self._shown = group_map(shown, numbers)
+        for i in self._last:
+            self._earlier.pop(i, None)
+        self._recent.append(group_map(shown, numbers))
         return numbers, next_id

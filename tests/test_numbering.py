@@ -3,7 +3,7 @@
 import numpy as np
 
 from motionbits import MotionBitsSegmenter
-from motionbits.numbering import ShownNumbers, mask_ious, match_greedy, renumber
+from motionbits.numbering import RECENT_FRAMES, ShownNumbers, mask_ious, match_greedy, renumber
 from motionbits.records import MotionBit, MotionBitsResult, group_map
 from motionbits.synth import demo_clip
 
@@ -63,6 +63,23 @@ def test_reborn_on_the_same_pixels_keeps_the_number():
     assert got == {7: 1, 9: 9}
 
 
+def test_reborn_after_a_gap_keeps_the_number_within_recent_frames():
+    numbers = ShownNumbers()
+    _frame(numbers, _state(SMALL, BIG), {1: 1, 2: 1})  # "1" on ids 1 + 2
+    _frame(numbers, _state(BIG), {2: 2})  # "1" on id 2 alone
+    for _ in range(3):  # id 2 retired; nothing shown
+        _frame(numbers, _state(), {})
+    got, _ = _frame(numbers, _state((7, slice(11, 20), slice(0, 10))), {7: 7})
+    assert got == {7: 1}
+    numbers = ShownNumbers()  # past RECENT_FRAMES: a number of its own
+    _frame(numbers, _state(SMALL, BIG), {1: 1, 2: 1})
+    _frame(numbers, _state(BIG), {2: 2})
+    for _ in range(RECENT_FRAMES):
+        _frame(numbers, _state(), {})
+    got, _ = _frame(numbers, _state((7, slice(11, 20), slice(0, 10))), {7: 7})
+    assert got == {7: 7}
+
+
 def test_a_group_not_shown_passes_no_number_on():
     numbers = ShownNumbers()
     state = _state(SMALL, BIG)
@@ -71,6 +88,25 @@ def test_a_group_not_shown_passes_no_number_on():
     shown = group_map(_state(SMALL), {1: 1})
     got, _ = numbers.assign(shown, state, {1: 1, 2: 2}, 100)
     assert got == {1: 1}
+
+
+def test_a_mark_hidden_for_some_frames_comes_back_under_its_number():
+    numbers = ShownNumbers()
+    state = _state(SMALL, BIG)
+    assert _frame(numbers, state, {1: 1, 2: 1})[0] == {1: 1}
+    assert _frame(numbers, state, {1: 1, 2: 2})[0] == {1: 100, 2: 1}  # split: id 2 keeps "1"
+    for _ in range(2):  # id 2 hidden (too small to show, say)
+        assert _frame(numbers, state, {1: 1, 2: 0}, 101)[0] == {1: 100}
+    got, next_id = _frame(numbers, state, {1: 1, 2: 2}, 101)
+    assert got == {1: 100, 2: 1} and next_id == 101  # back under "1", not "2"
+    # a number held now is not taken back by an earlier claim
+    numbers = ShownNumbers()
+    _frame(numbers, _state((5, slice(0, 4), slice(0, 4)), BIG), {5: 5, 2: 2})
+    _frame(numbers, _state((5, slice(0, 4), slice(0, 4)), BIG), {5: 0, 2: 2})
+    got, _ = _frame(numbers, _state((5, slice(0, 4), slice(0, 4)), BIG), {5: 2, 2: 2})
+    assert got == {2: 2}  # joined: the last frame's "2" wins over id 5's earlier "5"
+    got, _ = _frame(numbers, _state((5, slice(0, 4), slice(0, 4)), BIG), {5: 5, 2: 2})
+    assert got == {5: 5, 2: 2}
 
 
 def test_numbers_are_unique_and_positive_over_a_random_stream():
