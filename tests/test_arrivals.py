@@ -282,3 +282,25 @@ def test_a_block_knocked_for_one_frame_keeps_its_motionbit(seed):
     counts[ids == 0] = 0
     assert counts.max() >= 0.9 * body.sum(), (ids, counts)
     assert (last.labels[~body] > 0).mean() < 0.01
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_block_knocked_beside_a_moving_agent_keeps_its_motionbit(seed):
+    """As above, with the agent that knocked it still moving 20 px beside it: the pixels
+    of the newborn farther than 7.5 grid cells from the agent's are judged alone (until
+    round 37 any MotionBit moving that near made the block's die unconfirmed). The agent's
+    MotionBit does not take the block."""
+    block = Polygon.rect(100, 90, 140, 130, texture_seed=3)
+    agent = Polygon.rect(170, 10, 200, 70, texture_seed=5)  # moves down beside the block
+    still = Polygon.regular(60, 200, 22, 5, texture_seed=8)
+    clip = render_planar_clip([Body((block,), velocity=(10.0, 0.0), start=0, stop=1),
+                               Body((agent,), velocity=(0.0, 6.0), start=0),
+                               Body((still,))], size=SIZE, n_frames=10, seed=seed)
+    last = list(segment_video(clip.frames, CONFIG))[-1]
+    body, moved = clip.labels[-1] == 1, clip.labels[-1] == 2
+    ids, counts = np.unique(last.labels[body], return_counts=True)
+    counts[ids == 0] = 0
+    mine = ids[np.argmax(counts)]
+    assert mine > 0 and counts.max() >= 0.9 * body.sum(), (ids, counts)
+    assert (last.labels[moved] == mine).mean() < 0.05
+    assert (last.labels[clip.labels[-1] == 0] > 0).mean() < 0.01
