@@ -34,13 +34,13 @@ import numpy as np
 from motionbits.boxes import label_areas
 from motionbits.records import MotionBitsResult, group_map
 
-__all__ = ["REBORN_IOU", "RECENT_FRAMES", "ShownNumbers", "inherited_weights", "match_greedy", "mask_ious",
-           "renumber"]
+__all__ = ["REBORN_IOU", "RECENT_FRAMES", "ShownNumbers", "inherited_weights", "match_greedy",
+           "mask_ious", "renumber"]
 
-#: A mark that inherits no number takes that of a mark shown at the last frame and gone
+#: A mark that inherits no number takes that of a mark shown at a recent frame and gone
 #: now when their masks overlap by this IoU: the same body marked again (a MotionBit
-#: retired and another born on its pixels in one frame). 0.5: each mask is then more the
-#: other's than anything else's (the usual "same object" match).
+#: retired and another born on its pixels). 0.5: each mask is then more the other's than
+#: anything else's (the usual "same object" match) ...
 REBORN_IOU = 0.5
 #: ... shown at one of this many last frames (a body whose MotionBit retired is often
 #: marked again a few frames later: on ``02_cups.mp4`` most such marks came back within
@@ -55,7 +55,7 @@ def inherited_weights(areas: np.ndarray, rep: dict[int, int], last: dict[int, in
     Args:
         areas: (max id + 1,) int px of each MotionBit id now (:func:`label_areas`).
         rep: id -> the label of the group it is shown under (0 = not shown).
-        last: id -> the number it was shown under at the last frame.
+        last: id -> a number it was shown under (at the last frame, or earlier).
 
     Returns:
         (number, group label) -> px now of the group's members that had that number.
