@@ -12,7 +12,7 @@ from motionbits.nodes import NodeGrid
 from motionbits.propagation import propagate_components
 from motionbits.records import (MotionSpans, _area_centroid, build_result, group_map, moving_ids,
                                 twist_sources)
-from motionbits.retirement import Origin, moved_once, retire
+from motionbits.retirement import Origin, moved_once, origin_residuals, retire
 from motionbits.twists import nodes_to_fit
 
 
@@ -122,9 +122,10 @@ def test_retire_drops_a_motionbit_whose_pixels_did_not_move():
 
 
 @pytest.mark.parametrize("moved, busy, stands", [
-    (True, False, True),    # its one frame of motion explains what stands there now
-    (False, False, False),  # nothing moved there: a flicker of the flow
-    (True, True, False),    # a MotionBit moves beside it: a piece of that one, left behind
+    (True, None, True),            # its one frame of motion explains what stands there now
+    (False, None, False),          # nothing moved there: a flicker of the flow
+    (True, slice(40, 60), False),  # a MotionBit moves over half of it: a piece left behind
+    (True, slice(60, 70), True),   # ... 10 px beside it: its pixels beyond reach (90%) judged
 ])
 def test_moved_once_keeps_a_newborn_whose_one_frame_of_motion_was_real(moved, busy, stands):
     rng = np.random.default_rng(2)
@@ -135,7 +136,29 @@ def test_moved_once_keeps_a_newborn_whose_one_frame_of_motion_was_real(moved, bu
     # born at the last frame with a 6 px motion (current -> previous: 6 px to the left)
     origin = Origin(before, np.array([[1.0, 0, -6.0], [0, 1.0, 0], [0, 0, 1.0]]), np.eye(3))
     near = np.zeros((80, 80), bool)
-    near[30:50, 60:70] = busy
+    if busy is not None:
+        near[30:50, busy] = True
+    out = moved_once({4: origin}, [4], labels, np.ones((80, 80), bool), near, None, now,
+                     reach=12, margin=5.0, explained=12.0)
+    assert out == ({4} if stands else set())
+
+
+@pytest.mark.parametrize("busy, stands", [(None, True), (slice(60, 70), False)])
+def test_moved_once_beside_a_moving_motionbit_the_world_must_explain_it_clearly_worse(
+        busy, stands):
+    """A faint texture (the world explains it within 12-24 grey levels): alone it stands;
+    beside a moving MotionBit that is not enough (retirement.NEAR_WORLD)."""
+    rng = np.random.default_rng(2)
+    before = rng.uniform(100, 140, (80, 80)).astype(np.float32)  # 40 grey levels
+    now = np.roll(before, 6, axis=1)
+    labels = np.zeros((80, 80), np.int32)
+    labels[30:50, 30:50] = 4
+    origin = Origin(before, np.array([[1.0, 0, -6.0], [0, 1.0, 0], [0, 0, 1.0]]), np.eye(3))
+    near = np.zeros((80, 80), bool)
+    if busy is not None:
+        near[30:50, busy] = True
+    world, body = origin_residuals(origin, now, labels == 4, 2.0)
+    assert 12.0 < world < 2 * 12.0 and body < 1.0  # what the case is about
     out = moved_once({4: origin}, [4], labels, np.ones((80, 80), bool), near, None, now,
                      reach=12, margin=5.0, explained=12.0)
     assert out == ({4} if stands else set())
