@@ -121,6 +121,25 @@ def test_retire_drops_a_motionbit_whose_pixels_did_not_move():
     assert set(origins) == {1}
 
 
+#: A newborn (id 4, rows and columns 30-50 of an 80 x 80 frame) born at the last frame
+#: with a 6 px motion (current -> previous: 6 px to the left).
+NEWBORN = (slice(30, 50), slice(30, 50))
+SIX_LEFT = np.array([[1.0, 0, -6.0], [0, 1.0, 0], [0, 0, 1.0]])
+
+
+def _moved_once(before: np.ndarray, now: np.ndarray, busy: slice | None) -> set[int]:
+    """moved_once on the newborn, with a MotionBit moving over the columns ``busy`` of its
+    rows (reach 12 px, margin 5, explained 12 grey levels)."""
+    labels = np.zeros((80, 80), np.int32)
+    labels[NEWBORN] = 4
+    near = np.zeros((80, 80), bool)
+    if busy is not None:
+        near[NEWBORN[0], busy] = True
+    origin = Origin(before, SIX_LEFT, np.eye(3))
+    return moved_once({4: origin}, [4], labels, np.ones((80, 80), bool), near, None, now,
+                      reach=12, margin=5.0, explained=12.0)
+
+
 @pytest.mark.parametrize("moved, busy, stands", [
     (True, None, True),            # its one frame of motion explains what stands there now
     (False, None, False),          # nothing moved there: a flicker of the flow
@@ -128,19 +147,9 @@ def test_retire_drops_a_motionbit_whose_pixels_did_not_move():
     (True, slice(60, 70), True),   # ... 10 px beside it: its pixels beyond reach (90%) judged
 ])
 def test_moved_once_keeps_a_newborn_whose_one_frame_of_motion_was_real(moved, busy, stands):
-    rng = np.random.default_rng(2)
-    before = rng.uniform(0, 255, (80, 80)).astype(np.float32)
+    before = np.random.default_rng(2).uniform(0, 255, (80, 80)).astype(np.float32)
     now = np.roll(before, 6, axis=1) if moved else before.copy()  # 6 px to the right
-    labels = np.zeros((80, 80), np.int32)
-    labels[30:50, 30:50] = 4
-    # born at the last frame with a 6 px motion (current -> previous: 6 px to the left)
-    origin = Origin(before, np.array([[1.0, 0, -6.0], [0, 1.0, 0], [0, 0, 1.0]]), np.eye(3))
-    near = np.zeros((80, 80), bool)
-    if busy is not None:
-        near[30:50, busy] = True
-    out = moved_once({4: origin}, [4], labels, np.ones((80, 80), bool), near, None, now,
-                     reach=12, margin=5.0, explained=12.0)
-    assert out == ({4} if stands else set())
+    assert _moved_once(before, now, busy) == ({4} if stands else set())
 
 
 @pytest.mark.parametrize("busy, stands", [(None, True), (slice(60, 70), False)])
@@ -148,20 +157,13 @@ def test_moved_once_beside_a_moving_motionbit_the_world_must_explain_it_clearly_
         busy, stands):
     """A faint texture (the world explains it within 12-24 grey levels): alone it stands;
     beside a moving MotionBit that is not enough (retirement.NEAR_WORLD)."""
-    rng = np.random.default_rng(2)
-    before = rng.uniform(100, 140, (80, 80)).astype(np.float32)  # 40 grey levels
+    before = np.random.default_rng(2).uniform(100, 140, (80, 80)).astype(np.float32)
     now = np.roll(before, 6, axis=1)
-    labels = np.zeros((80, 80), np.int32)
-    labels[30:50, 30:50] = 4
-    origin = Origin(before, np.array([[1.0, 0, -6.0], [0, 1.0, 0], [0, 0, 1.0]]), np.eye(3))
-    near = np.zeros((80, 80), bool)
-    if busy is not None:
-        near[30:50, busy] = True
-    world, body = origin_residuals(origin, now, labels == 4, 2.0)
+    mask = np.zeros((80, 80), bool)
+    mask[NEWBORN] = True
+    world, body = origin_residuals(Origin(before, SIX_LEFT, np.eye(3)), now, mask, 2.0)
     assert 12.0 < world < 2 * 12.0 and body < 1.0  # what the case is about
-    out = moved_once({4: origin}, [4], labels, np.ones((80, 80), bool), near, None, now,
-                     reach=12, margin=5.0, explained=12.0)
-    assert out == ({4} if stands else set())
+    assert _moved_once(before, now, busy) == ({4} if stands else set())
 
 
 def test_compensate_camera_removes_a_global_shift():
