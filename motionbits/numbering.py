@@ -84,11 +84,15 @@ def match_greedy(weights: dict[tuple[int, int], float]) -> dict[int, int]:
     return numbers
 
 
-def mask_ious(now: np.ndarray, before: np.ndarray) -> dict[tuple[int, int], float]:
-    """IoU of every pair of overlapping labels of two label maps.
+def mask_ious(now: np.ndarray, before: np.ndarray, area_now: np.ndarray,
+              area_before: np.ndarray) -> dict[tuple[int, int], float]:
+    """IoU of every pair of overlapping labels of two label maps (the evaluation's
+    :func:`motionbits.eval.overlap.contingency` counts every pixel and checks its input;
+    this runs at every frame and counts only where both maps have a label).
 
     Args:
         now, before: (H, W) int32 label maps of one size (0 = background).
+        area_now, area_before: their :func:`label_areas`.
 
     Returns:
         (label in ``before``, label in ``now``) -> IoU of their masks, for the pairs that
@@ -100,7 +104,6 @@ def mask_ious(now: np.ndarray, before: np.ndarray) -> dict[tuple[int, int], floa
     k = int(now.max()) + 1
     pairs, shared = np.unique(before[both].astype(np.int64) * k + now[both],
                               return_counts=True)
-    area_now, area_before = label_areas(now), label_areas(before)
     return {(d, r): n / (area_before[d] + area_now[r] - n)
             for d, r, n in zip(*(x.tolist() for x in np.divmod(pairs, k)), shared.tolist())}
 
@@ -126,8 +129,9 @@ class ShownNumbers:
     def __init__(self) -> None:
         self._last: dict[int, int] = {}  # MotionBit id -> its number at the last frame
         self._earlier: dict[int, int] = {}  # id -> its number, last shown before that
-        # (h, w) int32 the marks shown at the last frames, numbered, the latest last
-        self._recent: deque[np.ndarray] = deque(maxlen=RECENT_FRAMES)
+        # the marks shown at the last frames, numbered ((h, w) int32), with their
+        # label_areas; the latest last
+        self._recent: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=RECENT_FRAMES)
 
     def assign(self, shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
                next_id: int) -> tuple[dict[int, int], int]:
@@ -144,7 +148,8 @@ class ShownNumbers:
             group label -> number for each label in ``shown`` (the numbers are distinct
             and > 0), and the next free id (past the fresh numbers given).
         """
-        groups = set((np.flatnonzero(label_areas(shown)[1:]) + 1).tolist())
+        shown_areas = label_areas(shown)
+        groups = set((np.flatnonzero(shown_areas[1:]) + 1).tolist())
         areas = label_areas(state)
         numbers: dict[int, int] = {}
         for memory in (self._last, self._earlier):  # the last frame's claims first
@@ -152,12 +157,13 @@ class ShownNumbers:
             numbers.update(match_greedy({
                 (d, r): w for (d, r), w in inherited_weights(areas, rep, memory).items()
                 if r in groups and r not in numbers and d not in taken}))
-        for before in reversed(self._recent):  # reborn: the latest frame first
+        for before, before_areas in reversed(self._recent):  # reborn: the latest first
             orphans, taken = groups - numbers.keys(), set(numbers.values())
             if not orphans:
                 break
             numbers.update(match_greedy({
-                (d, r): iou for (d, r), iou in mask_ious(shown, before).items()
+                (d, r): iou for (d, r), iou in mask_ious(shown, before, shown_areas,
+                                                         before_areas).items()
                 if r in orphans and d not in taken and iou >= REBORN_IOU}))
         taken = set(numbers.values())
         for r in sorted(groups - numbers.keys()):
@@ -171,5 +177,6 @@ class ShownNumbers:
         self._last = {i: numbers[r] for i, r in rep.items() if r in numbers}
         for i in self._last:
             self._earlier.pop(i, None)
-        self._recent.append(group_map(shown, numbers))
+        numbered = group_map(shown, numbers)
+        self._recent.append((numbered, label_areas(numbered)))
         return numbers, next_id

@@ -3,6 +3,7 @@
 import numpy as np
 
 from motionbits import MotionBitsSegmenter
+from motionbits.boxes import label_areas
 from motionbits.numbering import RECENT_FRAMES, ShownNumbers, mask_ious, match_greedy, renumber
 from motionbits.records import MotionBit, MotionBitsResult, group_map
 from motionbits.synth import demo_clip
@@ -135,8 +136,10 @@ def test_match_greedy_heaviest_first_each_once():
 def test_mask_ious():
     before = _state((3, slice(0, 10), slice(0, 10)))
     now = _state((5, slice(0, 10), slice(5, 15)))
-    assert mask_ious(now, before) == {(3, 5): 50 / 150}
-    assert mask_ious(now, np.zeros_like(before)) == {}
+    empty = np.zeros_like(before)
+    areas = label_areas(now), label_areas(before), label_areas(empty)
+    assert mask_ious(now, before, areas[0], areas[1]) == {(3, 5): 50 / 150}
+    assert mask_ious(now, empty, areas[0], areas[2]) == {}
 
 
 def test_renumber_maps_labels_nodes_and_records():
