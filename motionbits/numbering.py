@@ -20,22 +20,22 @@ becomes "273" and back cannot follow the body. So the result shows each group un
   representative's id if no other mark holds it, else a fresh id from the segmenter's
   counter (never any MotionBit's id, past or future).
 
-Only the output is renumbered (:func:`renumber`); the segmenter's state keeps the
+Only the output is numbered (:func:`by_number` gives :func:`motionbits.records.build_result`
+the numbers instead of the groups' labels); the segmenter's state keeps the
 representatives' ids.
 """
 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import replace
 
 import numpy as np
 
 from motionbits.boxes import label_areas
-from motionbits.records import MotionBitsResult, group_map
+from motionbits.records import group_map
 
-__all__ = ["REBORN_IOU", "RECENT_FRAMES", "ShownNumbers", "inherited_weights", "match_greedy",
-           "mask_ious", "renumber"]
+__all__ = ["REBORN_IOU", "RECENT_FRAMES", "ShownNumbers", "by_number", "inherited_weights",
+           "match_greedy", "mask_ious"]
 
 #: A mark that inherits no number takes that of a mark shown at a recent frame and gone
 #: now when their masks overlap by this IoU: the same body marked again (a MotionBit
@@ -108,14 +108,19 @@ def mask_ious(now: np.ndarray, before: np.ndarray, area_now: np.ndarray,
             for d, r, n in zip(*(x.tolist() for x in np.divmod(pairs, k)), shared.tolist())}
 
 
-def renumber(result: MotionBitsResult, numbers: dict[int, int]) -> MotionBitsResult:
-    """``result`` with each label ``r`` shown as ``numbers[r]``: its ``labels``, its
-    ``node_labels`` (a node of a group not shown, absent from ``numbers``, becomes 0) and
-    its records' ids (sorted by the new ids)."""
-    records = sorted((replace(mb, id=numbers[mb.id]) for mb in result.motionbits),
-                     key=lambda mb: mb.id)
-    return replace(result, labels=group_map(result.labels, numbers), motionbits=records,
-                   node_labels=group_map(result.node_labels, numbers))
+def by_number(rep: dict[int, int], source: dict[int, int], numbers: dict[int, int]
+              ) -> tuple[dict[int, int], dict[int, int]]:
+    """The groups under their numbers: ``rep`` (id -> group label) as id -> its group's
+    number (0 where the group has none: not shown), and ``source`` (group label -> the
+    member whose twist it reports) as number -> member.
+
+    Args:
+        rep: id -> the label of the group it is shown under (0 = not shown).
+        source: group label -> member id (:func:`motionbits.records.twist_sources`).
+        numbers: group label -> number (:meth:`ShownNumbers.assign`).
+    """
+    return ({i: numbers.get(r, 0) for i, r in rep.items()},
+            {numbers[r]: m for r, m in source.items() if r in numbers})
 
 
 class ShownNumbers:

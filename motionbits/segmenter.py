@@ -43,7 +43,7 @@ from motionbits.merging import (MIN_MOVED, MotionBitGroups, drop_seen_still, obs
                                 seen_still, standing_still)
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
-from motionbits.numbering import ShownNumbers, renumber
+from motionbits.numbering import ShownNumbers, by_number
 from motionbits.parallax import ParallaxOnly
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
@@ -563,13 +563,14 @@ class MotionBitsSegmenter:
                 shown = drop_labels(shown, self._first_look.uncovered(shown, cur, still_marks))
             # stripes are not a body (the flow along a wood grain's lines)
             shown = hide_thin(shown, int(np.ceil(max(grid.cell))))
-            result = build_result(self.frame_index, shown, node_ids, ids, thetas, trans,
-                                  moving, rep, source, self._spans, grid, self._input_size)
             # each mark under the number its body was shown under (the state keeps the
             # groups' representatives)
             numbers, self._next_id = self._numbers.assign(shown, with_links, rep,
                                                           self._next_id)
-            result = renumber(result, numbers)
+            member_numbers, numbered_source = by_number(rep, source, numbers)
+            result = build_result(self.frame_index, group_map(shown, numbers), node_ids, ids,
+                                  thetas, trans, moving, member_numbers, numbered_source,
+                                  self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
         return result
 

@@ -4,8 +4,9 @@ import numpy as np
 
 from motionbits import MotionBitsSegmenter
 from motionbits.boxes import label_areas
-from motionbits.numbering import RECENT_FRAMES, ShownNumbers, mask_ious, match_greedy, renumber
-from motionbits.records import MotionBit, MotionBitsResult, group_map
+from motionbits.numbering import (RECENT_FRAMES, ShownNumbers, by_number, mask_ious,
+                                  match_greedy)
+from motionbits.records import MotionBitsResult, group_map
 from motionbits.synth import demo_clip
 
 
@@ -142,15 +143,12 @@ def test_mask_ious():
     assert mask_ious(now, empty, areas[0], areas[2]) == {}
 
 
-def test_renumber_maps_labels_nodes_and_records():
-    labels = np.array([[0, 4], [7, 7]], np.int32)
-    nodes = np.array([[4, 9], [7, 0]], np.int32)  # group 9's mark is not shown
-    records = [MotionBit(id=4, area=1, bbox=(1, 0, 2, 1), centroid=(1.0, 0.0)),
-               MotionBit(id=7, area=2, bbox=(0, 1, 2, 2), centroid=(0.5, 1.0))]
-    out = renumber(MotionBitsResult(3, labels, records, nodes), {4: 12, 7: 2})
-    assert out.labels.tolist() == [[0, 12], [2, 2]]
-    assert out.node_labels.tolist() == [[12, 0], [2, 0]]
-    assert [(mb.id, mb.area) for mb in out.motionbits] == [(2, 2), (12, 1)]
+def test_by_number_gives_members_and_twist_sources_their_groups_numbers():
+    rep = {4: 4, 5: 4, 7: 7, 9: 9}  # group 9 is not shown: it has no number
+    source = {4: 5, 7: 7, 9: 9}
+    members, sources = by_number(rep, source, {4: 12, 7: 2})
+    assert members == {4: 12, 5: 12, 7: 2, 9: 0}
+    assert sources == {12: 5, 2: 7}
 
 
 def _run(seg: MotionBitsSegmenter, frames) -> list[MotionBitsResult]:
