@@ -34,7 +34,8 @@ lies mostly where a MotionBit passed takes the id of the MotionBit that last cov
 there, if that one stands still beside it, and else becomes a new MotionBit, confirmed at
 the next frame if it still stands there (as SetDown's pieces): shown at once if it is
 solid and no moving MotionBit surrounds it, else from the next frame
-(:meth:`motionbits.setdown.SetDown.adopt`; README, "Bodies that arrived", round 21).
+(:meth:`motionbits.setdown.SetDown.adopt`; docs/reading_the_paper.md,
+"Bodies that arrived", round 21).
 
 A body may also arrive where no MotionBit ever was: the flow read it moving (a block
 carried under a hand whose MotionBit held the hand only), and no cluster took it. The
@@ -42,14 +43,14 @@ memory also keeps where the flow was seen moving since the static world was last
 still there; a piece of such pixels that passes the tests above and touches no MotionBit
 is a new MotionBit of its own (its parts within one grid cell are one piece, and pieces
 found at one frame within ``JOIN_CELLS`` grid cells are one body). Such pieces do not
-wait. README "Moving cameras", round 33.
+wait. docs/reading_the_paper.md, "Moving cameras", round 33.
 
 Under a moving camera the memory follows the static world's model (homography and
 parallax) before each search.
 It is folded in with :class:`motionbits.revealed.StaticMemory`'s pixels seen still, so it
 is off when that memory is (config ``reveal_tolerance`` = 0).
 
-Measured on the pick-and-place track (README, "Bodies that arrived").
+Measured on the pick-and-place track (docs/reading_the_paper.md, "Bodies that arrived").
 """
 
 from __future__ import annotations
@@ -85,7 +86,7 @@ TOUCH = 2
 JOIN_CELLS = 3
 #: Grid cells around a MotionBit standing still within which the rest of its body is
 #: sought. Pick-and-place mIoU 42.4 -> 49.5, robot / hand 62.5 / 62.0 -> 64.1 / 63.1
-#: (round 17, README "Bodies that arrived").
+#: (round 17, docs/reading_the_paper.md, "Bodies that arrived").
 NEAR_CELLS = 5
 
 #: (rows, cols) slices of an image box, the (h, w) bool piece inside it, and the id of the

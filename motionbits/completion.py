@@ -36,7 +36,7 @@ it and the image under it have not changed (:class:`CutMemory`): GrabCut's answe
 on the mark's exact outline, and a block at rest was completed at one frame and not at
 the next.
 
-Measured in README "Completing marks by colour" (rounds 20 to 22).
+Measured in docs/results.md, "Completing marks by colour" (rounds 20 to 22).
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ __all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "WIDE
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
 #: background's for sure. 0.75 since the cut starts from the first look (round 25: a
 #: top face's mark reaches its body's sides only in a wider box; pickplace 60.5 -> 63.5,
-#: README "Completing marks by colour").
+#: docs/results.md, "Completing marks by colour").
 COMPLETION_REACH = 0.75
 #: A cut that runs out to its box's frame is tried again in a box grown this many times
 #: as far (the mark of a block's top face, seen from above at an angle, is a third of it).
@@ -95,7 +95,8 @@ FIRST_SEEN_KNOWN = 0.3
 #: ... and at most this share of those look otherwise now (a static body marked through
 #: parallax or smeared flow; a block kicked 2 cm changes 16-24% of its first look; of the
 #: marks matched to a body at the last frame of 140 generated pick-and-place scenes, none
-#: changed less than 10.6%; README "Marks that stand as first seen", rounds 33 and 36).
+#: changed less than 10.6%; docs/reading_the_paper.md,
+#: "Marks that stand as first seen are not shown", rounds 33 and 36).
 FIRST_SEEN_CHANGED = 0.08
 #: A mark shows the surface around it where a body was first seen
 #: (:meth:`FirstLook.uncovered`) only where the first look knows this share of it or more.
@@ -105,7 +106,8 @@ UNCOVERED_KNOWN = 0.5
 #: now (:meth:`FirstLook.uncovered`). Read off eight marks found at the last frame of
 #: generated pick-and-place scenes by the test without it: 2.8-9.4 for the table a body
 #: left, 1.8 and 2.0 for the marks of two bodies nudged 1.7 cm that cover the table
-#: beside them too (README "Marks left where a body was are not shown").
+#: beside them too (docs/reading_the_paper.md,
+#: "Marks left where a body was are not shown").
 UNCOVERED_CONTRAST = 2.5
 #: A mark found uncovered (:meth:`FirstLook.uncovered`) stays found while it overlaps the
 #: mark found at the last frame by this intersection over union.

@@ -112,7 +112,7 @@ class MotionBitsConfig:
     # ours (fast path): dense MCL costs m^3 on a block of m nodes; a larger block is
     # clustered through at most this many representatives (groups of neighbouring nodes).
     # 200 (was 400): clustering ~3x faster on the demo's ~300-node blocks, same labels on
-    # the demo, sim40 robot/hand mIoU within 1 point (README "Speed")
+    # the demo, sim40 robot/hand mIoU within 1 point (docs/speed.md, "Earlier sessions")
     mcl_max_items: int = 200
     # ours: True is the reference computation (float64, MCL iterated until idempotent);
     # False (default) is the fast path: float32, MCL stops once its labels are stable
@@ -179,7 +179,8 @@ class MotionBitsConfig:
     # ours (evidence.static_residual), off by default: "nothing moved" also explains a pixel
     # whose change a smooth brightness gain explains -- a moving soft shadow, flicker,
     # exposure -- with the gain's smoothness this many grid cells (Gaussian sigma, e.g. 3);
-    # it also explains flat bodies away (README: pickplace mIoU -7.5 with exact flow)
+    # it also explains flat bodies away (pickplace mIoU -7.5 with exact flow:
+    # docs/reading_the_paper.md, "A change of light need not be motion")
     relight_sigma: float = 0.0
     # ours (motionbits/revealed.py): with a still camera, a pixel that looks as it did when
     # last seen standing still -- within reveal_tolerance grey levels (5x5 mean; 0 = off)

@@ -31,7 +31,8 @@ pieces apart for good. This module joins them again at the level of MotionBit id
 - two MotionBits that agreed before but no longer touch are *apart* at a frame when both
   have a cluster and one moves while the other stands still; at two such frames in a row
   they are different bodies for good (a block set down and the hand that carried it,
-  which agreed while they moved as one: round 26, README "Bodies set down apart");
+  which agreed while they moved as one: round 26,
+  docs/reading_the_paper.md, "Bodies set down apart");
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final between the two; between groups it is
   outweighed when the groups agreed across at ``OUTWEIGH`` times as many frames as they

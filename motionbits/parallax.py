@@ -214,8 +214,8 @@ class ParallaxOnly:
     the table's plane, keeps its parallax as motion and is born as a MotionBit. Its motion
     lies along the epipolar lines at every frame, as the camera moves on; a body that moves
     by itself leaves them at some frame (a body moved exactly along them is the blind spot
-    of plane + parallax, README "Moving cameras", round 36). Per MotionBit this counts the
-    frames at which an epipole was known and it moved measurably
+    of plane + parallax, docs/reading_the_paper.md, "Moving cameras", round 36). Per
+    MotionBit this counts the frames at which an epipole was known and it moved measurably
     (:func:`along_epipolar_lines`), and how many of those along the lines.
     """
 

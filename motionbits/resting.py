@@ -26,7 +26,7 @@ where another mark has not taken those pixels, when
 Under a moving camera the remembered map and frame follow the static world's model first
 (as the arrivals' memory does), so "unchanged" is judged where the static world now is.
 
-Measured in README "Marks at rest".
+Measured in docs/results.md, "Marks at rest".
 """
 
 from __future__ import annotations

@@ -49,8 +49,8 @@ APART_CELLS = 7.5
 #: ... or, where one does (the agent that knocked it, still beside it), its pixels beyond
 #: that reach are judged alone if they are at least this share of it: a block knocked
 #: beside the hand is born joined with the smeared flow or the shadow between them, and
-#: until round 37 the whole MotionBit died unconfirmed (round 37, README "Births need
-#: visible motion, twice") ...
+#: until round 37 the whole MotionBit died unconfirmed (round 37, docs/reading_the_paper.md,
+#: "Births need visible motion, twice") ...
 OWN_SHARE = 0.25
 #: ... and the static world must then explain them worse by this factor of
 #: ``explained`` (config ``carry_tolerance``): beside a moving agent its wake and its

@@ -10,14 +10,15 @@ when it was last seen standing still, and whether something with another look ha
 it since; a pixel that looks as remembered again after being covered is *revealed*
 background (:meth:`StaticMemory.observe`), which "nothing moved" explains. The price: a
 body the hand covers and then lifts by a few pixels looks as it did at rest, and loses
-those pixels (README, "Background seen again").
+those pixels (docs/reading_the_paper.md, "Background seen again").
 
 Under a moving camera the memory follows the static world: each frame it is warped by
 the camera's model of the static world (homography and parallax, ``CameraMotion.world``)
 before it is compared, so the table an arm or its passing shadow has just uncovered is
 "nothing moved" there too (births on static surfaces whose look changed were the largest
 share of the moving camera's static false positives), and the cast-shadow test
-(:meth:`StaticMemory.shadowed`) reads the memory so carried (README, "Moving cameras").
+(:meth:`StaticMemory.shadowed`) reads the memory so carried (docs/reading_the_paper.md,
+"Moving cameras").
 A body that stood still at first and moves away reveals what it hid, which the memory
 never saw: nothing changes there. A body that comes to rest is remembered as
 it is once it is seen still, so a stopped body is never "revealed" away -- and with it
@@ -25,7 +26,7 @@ the id of its MotionBit: when a hand (or another body, or a shadow) has passed i
 of it, its pixels seen again as they were take that id back (:meth:`StaticMemory.restore`),
 unless that MotionBit moves now or was retired. The MotionBits at rest follow the same
 model: under a moving camera their labels are carried with it rather than with the flow
-(:func:`carry_at_rest`; README, "Moving cameras", round 24).
+(:func:`carry_at_rest`; docs/reading_the_paper.md, "Moving cameras", round 24).
 """
 
 from __future__ import annotations

@@ -89,7 +89,8 @@ def min_short_side(long_side: int, max_side: int) -> int:
 #: edges -- covers this many grid cells (about 250 px at 640x480, 0.08% of the frame; a
 #: mark on less is hard to read). Round 16: 4 -> 8 cut the spurious MotionBits by a third
 #: (most were 130-300 px: pieces of smeared flow, shadows, arrivals) and hid one body of
-#: the 9 under 400 px in 230 generated scenes that had been found (README, round 16).
+#: the 9 under 400 px in 230 generated scenes that had been found (round 16,
+#: docs/reading_the_paper.md, "Births need visible motion, twice").
 MIN_SHOWN_CELLS = 8
 
 #: Stage names of the per-frame timing report, in pipeline order. "flow" is the flow

@@ -55,7 +55,8 @@ EARNED_SHARE = 0.5
 #: ... and an opening by a square of ``COMPACT_CELLS`` grid cells must keep this share of
 #: it (compact: the strip of background a moving body uncovers is not). One cell, not two:
 #: a small block seen at 45 degrees, part of it still under the fingers, is a band ~9 px
-#: across, which an 11 px square removed (pick-and-place, README "Bodies set down").
+#: across, which an 11 px square removed (pick-and-place, docs/reading_the_paper.md,
+#: "Bodies set down").
 COMPACT_SHARE = 0.5
 COMPACT_CELLS = 1
 #: Frames over which a piece must be seen to have come with its MotionBit.

@@ -20,8 +20,8 @@ long enough for that memory to take it in, the scene as first seen
   a mark mostly shadow is not shown at all (the agent's shadow, left on the table as a
   mark at rest).
 
-The state keeps the motion's masks; only the masks shown change (README, "Cast shadows",
-round 27).
+The state keeps the motion's masks; only the masks shown change (docs/results.md,
+"Cast shadows", round 27).
 """
 
 from __future__ import annotations

@@ -112,7 +112,8 @@ def _shadow_clip(n_frames: int = 12) -> list[np.ndarray]:
 def test_moving_shadow_on_texture_is_not_a_motionbit(relight_sigma, expect_marks):
     """A soft shadow (penumbra ~30 px) sweeping 9 px/frame over a static texture: with the
     light-change test (``relight_sigma``, off by default) it is never a MotionBit; comparing
-    grey levels only, it is (hard-edged shadows still are, see the README)."""
+    grey levels only, it is (hard-edged shadows still are, see docs/reading_the_paper.md,
+    "A change of light need not be motion")."""
     config = CONFIG.with_(relight_sigma=relight_sigma)
     shown = [len(r.motionbits) for r in segment_video(_shadow_clip(), config)]
     assert (max(shown) > 0) == expect_marks, shown
