@@ -5,7 +5,8 @@ from conftest import best_iou
 
 from motionbits.camera import compensate_camera
 from motionbits.nodes import NodeGrid
-from motionbits.parallax import (ALONG_MIN_PX, OFF_LINES_EVERY, PARALLAX_FRAMES, ParallaxOnly,
+from motionbits.parallax import (ALONG, ALONG_MIN_PX, ALONG_PX, OFF, OFF_LINES_EVERY, OWN, OWN_PX,
+                                 PARALLAX_FRAMES, ParallaxOnly,
                                  along_epipolar_lines, epipolar_distance, fit_epipole,
                                  parallax_field)
 
@@ -273,8 +274,8 @@ def test_a_motionbit_moved_only_along_its_epipolar_lines_is_parallax_only():
         residual[40:] = 0.5 * ALONG_MIN_PX * (p[40:] - E) / np.linalg.norm(
             p[40:] - E, axis=1, keepdims=True)  # body 3: too slow to tell
         along = along_epipolar_lines(p, residual, node_ids, [1, 2, 3], e)
-        assert along[1] and 3 not in along
-        assert along[2] == (frame < PARALLAX_FRAMES - 1)
+        assert along[1] == ALONG and 3 not in along
+        assert along[2] == (ALONG if frame < PARALLAX_FRAMES - 1 else OWN)
         parallax.observe(p, residual, node_ids, {1, 2, 3}, e)
         assert parallax.ids([1, 2, 3]) == ({1} if frame == PARALLAX_FRAMES - 1 else set())
     # a body that is not present is not reported
@@ -282,23 +283,50 @@ def test_a_motionbit_moved_only_along_its_epipolar_lines_is_parallax_only():
 
 
 def test_one_frame_off_the_lines_in_five_does_not_make_parallax_a_motion():
-    """A tall static body read along its lines at 5 frames and off them at one (a flow
-    error, a poor epipole) is still parallax only; off them at two of seven it moved."""
+    """A tall static body read along its lines at 5 frames and off them by a flow error's
+    size at one (a poor epipole) is still parallax only; off them at two of seven it
+    moved."""
     rng = np.random.default_rng(4)
     p = rng.uniform([0, 0], [W, H], (40, 2))
     e = np.array([*E, 1.0])
     node_ids = np.repeat([1, 2], 20)
     along = 0.08 * (p - E)
     across = np.stack([-(p[:, 1] - E[1]), p[:, 0] - E[0]], 1)
-    across *= 3.0 / np.linalg.norm(across, axis=1, keepdims=True)
+    # off the lines by more than ALONG_PX, not by OWN_PX
+    across *= 0.5 * (ALONG_PX + OWN_PX) / np.linalg.norm(across, axis=1, keepdims=True)
+    assert np.all(np.linalg.norm(across, axis=1) > ALONG_MIN_PX)
     parallax = ParallaxOnly()
     for frame in range(OFF_LINES_EVERY + 2):
         residual = along.copy()
         if frame == 2:  # both off the lines once
             residual[:] = across
+            assert set(along_epipolar_lines(p, residual, node_ids, [1, 2], e).values()) == {OFF}
         if frame == OFF_LINES_EVERY + 1:  # body 2 a second time
             residual[20:] = across[20:]
         parallax.observe(p, residual, node_ids, {1, 2}, e)
         if frame == 2:  # one off, two along: not yet
             assert parallax.ids([1, 2]) == set()
+    assert parallax.ids([1, 2]) == {1}
+
+
+def test_parallax_within_a_flow_error_of_the_lines_and_a_motion_of_its_own():
+    """A slow tall static body (1.5 px a frame) read 0.2 px off its lines (DIS's error,
+    over 3 degrees at that speed) moves along them; a body knocked 5 px across its lines at
+    one frame, then standing tall and moving along them through parallax, moved by itself
+    and is never parallax only, however many frames follow."""
+    rng = np.random.default_rng(5)
+    p = rng.uniform([0, 0], [W, H], (40, 2))
+    e = np.array([*E, 1.0])
+    node_ids = np.repeat([1, 2], 20)
+    line = (p - E) / np.linalg.norm(p - E, axis=1, keepdims=True)
+    normal = np.stack([-line[:, 1], line[:, 0]], 1)
+    slow = 1.5 * line + 0.2 * normal  # 7.6 degrees off, 0.2 px
+    assert ALONG_MIN_PX < 1.5 and 0.2 < ALONG_PX
+    parallax = ParallaxOnly()
+    for frame in range(PARALLAX_FRAMES + 3):
+        residual = slow.copy()
+        if frame == 0:  # body 2 knocked across its lines
+            residual[20:] = 5.0 * normal[20:]
+            assert along_epipolar_lines(p, residual, node_ids, [1, 2], e) == {1: ALONG, 2: OWN}
+        parallax.observe(p, residual, node_ids, {1, 2}, e)
     assert parallax.ids([1, 2]) == {1}
