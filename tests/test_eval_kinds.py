@@ -7,7 +7,7 @@ import numpy as np
 from motionbits.eval import write_label_map
 from motionbits.eval.benchmark import run_benchmark
 from motionbits.eval.dataset import evaluate_dataset
-from motionbits.eval.kinds import body_kinds, format_kinds, iou_by_kind
+from motionbits.eval.kinds import body_kinds, body_roles, format_kinds, iou_by_kind
 from test_eval_dataset import make_scene, squares
 
 
@@ -46,9 +46,12 @@ def test_benchmark_scores_each_kind_of_body(tmp_path):
     by_kind = results["half"]["by_kind"]
     assert by_kind["robot"]["block"]["n"] == 2
     assert abs(by_kind["robot"]["block"]["mIoU"] - 0.5) < 1e-6
-    assert by_kind["robot"]["hand"] == {"n": 1, "mIoU": 0.0}
+    assert by_kind["robot"]["block"]["missed"] == 0.0
+    assert by_kind["robot"]["hand"] == {"n": 1, "mIoU": 0.0, "missed": 1.0}
     text = format_kinds(results)
-    assert "block" in text and "50.0" in text and "0.0" in text
+    assert "block" in text and "50.0 (0%)" in text and "0.0 (100%)" in text
+    assert results["half"]["by_role"] == {}  # no script, no push: roles unknown
+    assert format_kinds(results, "by_role") == ""
 
 
 def test_no_kinds_no_table():
@@ -63,4 +66,40 @@ def test_eval_of_saved_predictions_scores_each_kind(tmp_path):
         {"labels": {"1000": {"kind": "laptop"}, "2000": {"kind": "hand"}}}))
     write_label_map(tmp_path / "pred" / "hand" / "a.png", np.where(gt == 2000, 5, 0))
     by_kind = evaluate_dataset(tmp_path / "gt", tmp_path / "pred", progress=False)["by_kind"]
-    assert by_kind == {"hand": {"hand": {"n": 1, "mIoU": 1.0}, "laptop": {"n": 1, "mIoU": 0.0}}}
+    assert by_kind == {"hand": {"hand": {"n": 1, "mIoU": 1.0, "missed": 0.0},
+                                "laptop": {"n": 1, "mIoU": 0.0, "missed": 1.0}}}
+
+
+def test_body_roles_from_the_script(tmp_path):
+    meta = {"labels": {"1": {"body": "obj5"}, "2": {"body": "obj7"}, "3": {"body": "obj9"},
+                       "4": {"body": "obj11"}, "5": {"kind": "block"}},
+            "push": {"target": "obj7"},
+            "script": {"carries": [{"agent": "agent0", "body": "obj7"}],
+                       "kicks": [{"body": "obj9", "t": 1.5}, "junk"]}}
+    (tmp_path / "meta.json").write_text(json.dumps(meta))
+    # the carried push target is carried; label 5 names no body
+    assert body_roles(tmp_path) == {1: "other", 2: "carried", 3: "knocked", 4: "other"}
+    meta["script"] = {}
+    (tmp_path / "meta.json").write_text(json.dumps(meta))
+    assert body_roles(tmp_path) == {1: "other", 2: "pushed", 3: "other", 4: "other"}
+    for text in ('{"labels": {"1": {"body": "a"}}}', "not json", '{"push": 3, "labels": []}'):
+        (tmp_path / "meta.json").write_text(text)
+        assert body_roles(tmp_path) == {}
+
+
+def test_benchmark_scores_each_role_and_the_bodies_missed(tmp_path):
+    gt = squares((40, 48), (5, 5, 10), (20, 25, 10))  # ids 1000 (carried), 2000 (knocked)
+    scene = make_scene(tmp_path / "data" / "pickplace", "a", gt)
+    (scene / "meta.json").write_text(json.dumps(
+        {"labels": {"1000": {"body": "obj5", "kind": "block"},
+                    "2000": {"body": "obj7", "kind": "block"}},
+         "script": {"carries": [{"body": "obj5"}], "kicks": [{"body": "obj7"}]}}))
+    results, _ = run_benchmark(tmp_path / "data",
+                               {"first": lambda frames: np.where(gt == 1000, 3, 0)},
+                               progress=False)
+    by_role = results["first"]["by_role"]["pickplace"]
+    assert by_role == {"carried": {"n": 1, "mIoU": 1.0, "missed": 0.0},
+                       "knocked": {"n": 1, "mIoU": 0.0, "missed": 1.0}}
+    assert results["first"]["by_kind"]["pickplace"]["block"]["missed"] == 0.5
+    text = format_kinds(results, "by_role")
+    assert "role" in text and "100.0 (0%)" in text and "0.0 (100%)" in text

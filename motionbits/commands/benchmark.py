@@ -124,10 +124,11 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled", seconds_per_frame=spf), end="")
-    kinds = format_kinds(results)
-    if kinds:  # scenes of motionbits synth name their bodies' kinds
-        print()
-        print(kinds, end="")
+    for block in ("by_kind", "by_role"):  # scenes of motionbits synth name their bodies'
+        table = format_kinds(results, block)  # kinds and what the agents did to them
+        if table:
+            print()
+            print(table, end="")
     if args.json is not None:
         payload = {"methods": results, "seconds_per_frame": spf}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))

@@ -79,10 +79,11 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled"), end="")
-    kinds = format_kinds(results)
-    if kinds:  # scenes of motionbits synth name their bodies' kinds
-        print()
-        print(kinds, end="")
+    for block in ("by_kind", "by_role"):  # scenes of motionbits synth name their bodies'
+        table = format_kinds(results, block)  # kinds and what the agents did to them
+        if table:
+            print()
+            print(table, end="")
     if args.json is not None:
         payload = next(iter(results.values())) if len(results) == 1 else {"methods": results}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))

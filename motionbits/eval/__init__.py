@@ -11,6 +11,7 @@ MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
     adjusted_rand_index(a, b)                               agreement of two partitions
     scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
     body_kinds(scene) / iou_by_kind(per_scene, kinds)       mean IoU per kind of body
+    body_roles(scene)                                       carried / knocked / pushed / other
     compare_runs(a, b) / format_comparison(result)         two runs on the same scenes
     scene_changes(a, b) / format_scene_changes(rows)        ... which scenes moved, how
 """
@@ -19,7 +20,7 @@ from motionbits.eval.agreement import adjusted_rand_index
 from motionbits.eval.boundary import boundary_counts, boundary_map, boundary_tolerance
 from motionbits.eval.compare import (compare_runs, format_comparison, format_scene_changes,
                                      scene_changes)
-from motionbits.eval.kinds import body_kinds, iou_by_kind
+from motionbits.eval.kinds import body_kinds, body_roles, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
@@ -44,6 +45,7 @@ __all__ = [
     "scenes_from_sequence",
     "body_kinds",
     "iou_by_kind",
+    "body_roles",
     "compare_runs",
     "format_comparison",
     "scene_changes",

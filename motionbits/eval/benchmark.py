@@ -18,7 +18,7 @@ from tqdm import tqdm
 from motionbits.eval.dataset import (
     discover_scenes, load_scene, summarize_tracks,
 )
-from motionbits.eval.kinds import body_kinds, iou_by_kind
+from motionbits.eval.kinds import body_kinds, body_roles, iou_by_kind
 from motionbits.eval.labelmaps import write_label_map
 from motionbits.eval.metrics import FrameScores, evaluate_frame
 from motionbits.objects import check_label_map
@@ -47,7 +47,7 @@ def run_benchmark(
 
     Returns:
         ``(results, seconds_per_frame)``: per method the dict of
-        :func:`motionbits.eval.dataset.evaluate_dataset` (with its ``by_kind``), and its
+        :func:`motionbits.eval.dataset.evaluate_dataset` (with its ``by_kind`` and ``by_role``), and its
         mean seconds per frame.
         A method that raises ImportError (its package or model is not installed) is
         dropped with a warning on stderr instead of stopping the run.
@@ -65,10 +65,12 @@ def run_benchmark(
     seconds = {m: 0.0 for m in methods}
     unavailable: dict[str, str] = {}
     kinds: dict[str, dict[int, str]] = {}
+    roles: dict[str, dict[int, str]] = {}
     n_frames = 0
     for scene in tqdm(scenes, desc="benchmark", unit="scene", disable=not progress):
         frames, gt, ignore = load_scene(scene)  # the frames and gt.png fit together
         kinds[scene.key] = body_kinds(scene.path)
+        roles[scene.key] = body_roles(scene.path)
         n_frames += len(frames)
         for name, method in methods.items():
             if name in unavailable:
@@ -100,7 +102,8 @@ def run_benchmark(
         if name in unavailable:
             continue
         results[name] = {**summarize_tracks(by_track[name]), "per_scene": per_scene[name],
-                         "by_kind": iou_by_kind(per_scene[name], kinds)}
+                         "by_kind": iou_by_kind(per_scene[name], kinds),
+                         "by_role": iou_by_kind(per_scene[name], roles)}
     if not results:
         raise ImportError(f"no method could run: {unavailable}")
     spf = {m: seconds[m] / max(n_frames, 1) for m in results}

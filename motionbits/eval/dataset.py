@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 from tqdm import tqdm
 
-from motionbits.eval.kinds import body_kinds, iou_by_kind
+from motionbits.eval.kinds import body_kinds, body_roles, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 from motionbits.frames import whole_number
@@ -253,7 +253,8 @@ def evaluate_dataset(
         ``"false_positives"`` averaged over tracks, ``"tracks"``) and ``"per_scene":
         {"track/scene": FrameScores.to_dict()}`` and ``"by_kind"`` (mean IoU per track and
         kind of body, :func:`motionbits.eval.kinds.iou_by_kind`; empty where ``meta.json``
-        names no kinds); scores are fractions in [0, 1] except ``spurious`` (predicted
+        names no kinds) and ``"by_role"`` (the same per role of body,
+        :func:`motionbits.eval.kinds.body_roles`); scores are fractions in [0, 1] except ``spurious`` (predicted
         objects per scene).
     """
     if missing not in ("error", "empty"):
@@ -262,6 +263,7 @@ def evaluate_dataset(
     by_track: dict[str, list[FrameScores]] = {}
     per_scene = {}
     kinds: dict[str, dict[int, str]] = {}
+    roles: dict[str, dict[int, str]] = {}
     for scene in tqdm(scenes, desc="evaluate", unit="scene", disable=not progress):
         gt, ignore = load_ground_truth(scene)
         if callable(predict):
@@ -285,5 +287,6 @@ def evaluate_dataset(
         by_track.setdefault(scene.track, []).append(scores)
         per_scene[scene.key] = scores.to_dict()
         kinds[scene.key] = body_kinds(scene.path)
+        roles[scene.key] = body_roles(scene.path)
     return {**summarize_tracks(by_track), "per_scene": per_scene,
-            "by_kind": iou_by_kind(per_scene, kinds)}
+            "by_kind": iou_by_kind(per_scene, kinds), "by_role": iou_by_kind(per_scene, roles)}

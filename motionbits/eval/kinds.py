@@ -1,9 +1,13 @@
-"""Mean IoU per kind of body: which kinds of bodies a method misses.
+"""Mean IoU per kind and per role of body: which bodies a method misses.
 
 A track's mIoU mixes the agent (a gripper or hand, large and always moving) with the bodies
 it moves; a drop on laptop lids or glued composites hides in it. Scenes made by
 ``motionbits synth`` name each ground-truth body's kind in ``meta.json``
-(``{"labels": {"1": {"kind": "laptop", ...}, ...}}``); scenes without it are left out.
+(``{"labels": {"1": {"kind": "laptop", "body": "obj5", ...}, ...}}``) and what the agents
+did to which body (``"script"``: ``carries``, ``kicks``; ``"push"``: the target), so that
+a body's *role* is known too: carried (grasped, lifted, set down), knocked (kicked), pushed
+(the push target, not carried) or other (moved by a collision). Scenes without them are
+left out.
 """
 
 from __future__ import annotations
@@ -12,7 +16,30 @@ import json
 import math
 from pathlib import Path
 
-__all__ = ["body_kinds", "iou_by_kind", "format_kinds"]
+__all__ = ["body_kinds", "body_roles", "iou_by_kind", "format_kinds", "ROLES"]
+
+#: The roles :func:`body_roles` gives, in the order of precedence.
+ROLES = ("carried", "knocked", "pushed", "other")
+
+
+def _meta(scene: str | Path) -> dict:
+    """A scene's ``meta.json`` as a dict, ``{}`` when it is missing, not JSON, or not an
+    object."""
+    try:
+        meta = json.loads((Path(scene) / "meta.json").read_text())
+    except (OSError, ValueError, RecursionError):
+        return {}  # RecursionError: brackets nested thousands deep
+    return meta if isinstance(meta, dict) else {}
+
+
+def _labels(meta: dict) -> dict[int, dict]:
+    """Ground-truth id -> its entry in ``meta["labels"]``; entries that are not objects and
+    ids that are not whole numbers >= 1 are skipped (not the scene's every label)."""
+    labels = meta.get("labels")
+    if not isinstance(labels, dict):
+        return {}
+    return {int(i): v for i, v in labels.items()
+            if isinstance(v, dict) and str(i).isascii() and str(i).isdecimal() and int(i) >= 1}
 
 
 def body_kinds(scene: str | Path) -> dict[int, str]:
@@ -22,31 +49,53 @@ def body_kinds(scene: str | Path) -> dict[int, str]:
     kinds (``meta.json`` is free-form; a DAVIS window has none). An entry whose id is not
     a whole number >= 1 is skipped, not the scene's every kind.
     """
-    try:
-        meta = json.loads((Path(scene) / "meta.json").read_text())
-        labels = meta["labels"]
-        items = labels.items()
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
-        return {}  # RecursionError: brackets nested thousands deep
-    kinds = {}
-    for i, v in items:
-        if isinstance(v, dict) and "kind" in v and str(i).isascii() and str(i).isdecimal() and int(i) >= 1:
-            kinds[int(i)] = str(v["kind"])  # "1.5" failed int() and dropped every kind
-    return kinds
+    return {i: str(v["kind"]) for i, v in _labels(_meta(scene)).items() if "kind" in v}
+
+
+def body_roles(scene: str | Path) -> dict[int, str]:
+    """Ground-truth id -> role of the body (one of :data:`ROLES`), from a scene's
+    ``meta.json``: ``carried`` if an agent carried it (``script.carries[].body``),
+    ``knocked`` if it was kicked (``script.kicks[].body``), ``pushed`` if it is the push
+    target (``push.target``), else ``other``.
+
+    Returns ``{}`` when the scene names no bodies (``labels.<id>.body``) or says nothing of
+    what the agents did (no ``script`` and no ``push``): its roles are not known.
+    """
+    meta = _meta(scene)
+    script, push = meta.get("script"), meta.get("push")
+    if not isinstance(script, dict) and not isinstance(push, dict):
+        return {}
+
+    def bodies(key: str) -> set[str]:
+        items = script.get(key) if isinstance(script, dict) else None
+        return {str(e["body"]) for e in items if isinstance(e, dict) and "body" in e} \
+            if isinstance(items, list) else set()
+
+    carried, knocked = bodies("carries"), bodies("kicks")
+    pushed = str(push["target"]) if isinstance(push, dict) and "target" in push else None
+    roles = {}
+    for i, v in _labels(meta).items():
+        if "body" not in v:
+            continue
+        body = str(v["body"])
+        roles[i] = ("carried" if body in carried else "knocked" if body in knocked
+                    else "pushed" if body == pushed else "other")
+    return roles
 
 
 def iou_by_kind(per_scene: dict[str, dict], kinds: dict[str, dict[int, str]]
                 ) -> dict[str, dict[str, dict[str, float]]]:
-    """Mean IoU of the ground-truth bodies of each kind, per track.
+    """Mean IoU of the ground-truth bodies of each kind (or role), per track, and the share
+    of them missed (IoU 0: no prediction matched).
 
     Args:
         per_scene: scene key ``"<track>/<scene>"`` -> :meth:`FrameScores.to_dict` (its
             ``instances``: ``gt`` id and ``IoU`` with the matched prediction, 0 if none).
-        kinds: scene key -> :func:`body_kinds` of that scene.
+        kinds: scene key -> :func:`body_kinds` (or :func:`body_roles`) of that scene.
 
     Returns:
-        ``{track: {kind: {"n": bodies, "mIoU": mean IoU}}}``, kinds in name order; tracks
-        whose scenes name no kinds are left out.
+        ``{track: {kind: {"n": bodies, "mIoU": mean IoU, "missed": share with IoU 0}}}``,
+        kinds in name order; tracks whose scenes name no kinds are left out.
     """
     sums: dict[str, dict[str, list[float]]] = {}
     for key, scores in per_scene.items():
@@ -58,30 +107,40 @@ def iou_by_kind(per_scene: dict[str, dict], kinds: dict[str, dict[int, str]]
             if kind is None or iou is None or math.isnan(iou):
                 continue
             sums.setdefault(track, {}).setdefault(kind, []).append(float(iou))
-    return {t: {k: {"n": len(v), "mIoU": sum(v) / len(v)} for k, v in sorted(by.items())}
+    return {t: {k: {"n": len(v), "mIoU": sum(v) / len(v),
+                    "missed": sum(x == 0.0 for x in v) / len(v)}
+                for k, v in sorted(by.items())}
             for t, by in sums.items()}
 
 
-def format_kinds(results: dict[str, dict]) -> str:
-    """Text table of each method's ``by_kind`` block (:func:`iou_by_kind`): one row per
-    track and kind, one column per method; ``""`` when no method has one."""
-    methods = [m for m, r in results.items() if r.get("by_kind")]
+_TABLES = {"by_kind": ("kind", "[mIoU by kind of body] (meta.json labels)"),
+           "by_role": ("role", "[mIoU by role of body] (meta.json script: carried, knocked, "
+                               "pushed, other)")}
+
+
+def format_kinds(results: dict[str, dict], block: str = "by_kind") -> str:
+    """Text table of each method's ``block`` (``"by_kind"`` or ``"by_role"``,
+    :func:`iou_by_kind`): one row per track and kind, one column per method, each cell
+    "mIoU (% of the bodies missed)"; ``""`` when no method has one."""
+    column, title = _TABLES[block]
+    methods = [m for m, r in results.items() if r.get(block)]
     if not methods:
         return ""
     rows: list[tuple[str, str]] = []
     for m in methods:
-        rows += [(t, k) for t, by in results[m]["by_kind"].items() for k in by
+        rows += [(t, k) for t, by in results[m][block].items() for k in by
                  if (t, k) not in rows]
-    width = max(12, *(len(m) for m in methods))
-    head = f"{'track':<20}{'kind':<14}{'bodies':>7}" + "".join(f"{m:>{width + 2}}" for m in methods)
-    lines = ["[mIoU by kind of body] (meta.json labels)", head, "-" * len(head)]
+    width = max(14, *(len(m) for m in methods))
+    head = f"{'track':<20}{column:<14}{'bodies':>7}" + "".join(f"{m:>{width + 2}}" for m in methods)
+    lines = [title + ", mIoU (% missed)", head, "-" * len(head)]
     for t, k in rows:
-        n = next(results[m]["by_kind"][t][k]["n"] for m in methods
-                 if k in results[m]["by_kind"].get(t, {}))
+        n = next(results[m][block][t][k]["n"] for m in methods
+                 if k in results[m][block].get(t, {}))
         cells = []
         for m in methods:
-            entry = results[m]["by_kind"].get(t, {}).get(k)
-            text = "-" if entry is None else f"{100 * entry['mIoU']:.1f}"
+            entry = results[m][block].get(t, {}).get(k)
+            text = ("-" if entry is None else
+                    f"{100 * entry['mIoU']:.1f} ({100 * entry.get('missed', 0.0):.0f}%)")
             cells.append(f"{text:>{width + 2}}")
         lines.append(f"{t:<20}{k:<14}{n:>7}" + "".join(cells))
     return "\n".join(lines) + "\n"
