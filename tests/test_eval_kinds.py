@@ -72,16 +72,19 @@ def test_eval_of_saved_predictions_scores_each_kind(tmp_path):
 
 def test_body_roles_from_the_script(tmp_path):
     meta = {"labels": {"1": {"body": "obj5"}, "2": {"body": "obj7"}, "3": {"body": "obj9"},
-                       "4": {"body": "obj11"}, "5": {"kind": "block"}},
+                       "4": {"body": "obj11"}, "5": {"kind": "block"},
+                       "6": {"body": "pusher", "kind": "gripper"}},
             "push": {"target": "obj7"},
             "script": {"carries": [{"agent": "agent0", "body": "obj7"}],
                        "kicks": [{"body": "obj9", "t": 1.5}, "junk"]}}
     (tmp_path / "meta.json").write_text(json.dumps(meta))
     # the carried push target is carried; label 5 names no body
-    assert body_roles(tmp_path) == {1: "other", 2: "carried", 3: "knocked", 4: "other"}
+    assert body_roles(tmp_path) == {1: "other", 2: "carried", 3: "knocked", 4: "other",
+                                    6: "agent"}
     meta["script"] = {}
     (tmp_path / "meta.json").write_text(json.dumps(meta))
-    assert body_roles(tmp_path) == {1: "other", 2: "pushed", 3: "other", 4: "other"}
+    assert body_roles(tmp_path) == {1: "other", 2: "pushed", 3: "other", 4: "other",
+                                    6: "agent"}
     for text in ('{"labels": {"1": {"body": "a"}}}', "not json", '{"push": 3, "labels": []}'):
         (tmp_path / "meta.json").write_text(text)
         assert body_roles(tmp_path) == {}

@@ -11,7 +11,7 @@ MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
     adjusted_rand_index(a, b)                               agreement of two partitions
     scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
     body_kinds(scene) / iou_by_kind(per_scene, kinds)       mean IoU per kind of body
-    body_roles(scene)                                       carried / knocked / pushed / other
+    body_roles(scene)                                       agent, carried, knocked, pushed...
     compare_runs(a, b) / format_comparison(result)         two runs on the same scenes
     scene_changes(a, b) / format_scene_changes(rows)        ... which scenes moved, how
 """

@@ -47,8 +47,8 @@ def run_benchmark(
 
     Returns:
         ``(results, seconds_per_frame)``: per method the dict of
-        :func:`motionbits.eval.dataset.evaluate_dataset` (with its ``by_kind`` and ``by_role``), and its
-        mean seconds per frame.
+        :func:`motionbits.eval.dataset.evaluate_dataset` (with its ``by_kind`` and
+        ``by_role``), and its mean seconds per frame.
         A method that raises ImportError (its package or model is not installed) is
         dropped with a warning on stderr instead of stopping the run.
 

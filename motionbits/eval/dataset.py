@@ -254,8 +254,8 @@ def evaluate_dataset(
         {"track/scene": FrameScores.to_dict()}`` and ``"by_kind"`` (mean IoU per track and
         kind of body, :func:`motionbits.eval.kinds.iou_by_kind`; empty where ``meta.json``
         names no kinds) and ``"by_role"`` (the same per role of body,
-        :func:`motionbits.eval.kinds.body_roles`); scores are fractions in [0, 1] except ``spurious`` (predicted
-        objects per scene).
+        :func:`motionbits.eval.kinds.body_roles`); scores are fractions in [0, 1] except
+        ``spurious`` (predicted objects per scene).
     """
     if missing not in ("error", "empty"):
         raise ValueError(f"missing must be 'error' or 'empty', got {missing!r}")

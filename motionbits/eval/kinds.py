@@ -5,9 +5,9 @@ it moves; a drop on laptop lids or glued composites hides in it. Scenes made by
 ``motionbits synth`` name each ground-truth body's kind in ``meta.json``
 (``{"labels": {"1": {"kind": "laptop", "body": "obj5", ...}, ...}}``) and what the agents
 did to which body (``"script"``: ``carries``, ``kicks``; ``"push"``: the target), so that
-a body's *role* is known too: carried (grasped, lifted, set down), knocked (kicked), pushed
-(the push target, not carried) or other (moved by a collision). Scenes without them are
-left out.
+a body's *role* is known too: the agent (where it is scored), carried (grasped, lifted,
+set down), knocked (kicked), pushed (the push target, not carried) or other (moved by a
+collision). Scenes without them are left out.
 """
 
 from __future__ import annotations
@@ -16,10 +16,12 @@ import json
 import math
 from pathlib import Path
 
-__all__ = ["body_kinds", "body_roles", "iou_by_kind", "format_kinds", "ROLES"]
+__all__ = ["body_kinds", "body_roles", "iou_by_kind", "format_kinds", "ROLES", "AGENT_KINDS"]
 
 #: The roles :func:`body_roles` gives, in the order of precedence.
-ROLES = ("carried", "knocked", "pushed", "other")
+ROLES = ("agent", "carried", "knocked", "pushed", "other")
+#: Kinds of the agents of ``motionbits synth`` (a gripper or hand scored as a body).
+AGENT_KINDS = frozenset({"gripper", "hand", "pusher"})
 
 
 def _meta(scene: str | Path) -> dict:
@@ -54,7 +56,9 @@ def body_kinds(scene: str | Path) -> dict[int, str]:
 
 def body_roles(scene: str | Path) -> dict[int, str]:
     """Ground-truth id -> role of the body (one of :data:`ROLES`), from a scene's
-    ``meta.json``: ``carried`` if an agent carried it (``script.carries[].body``),
+    ``meta.json``: ``agent`` if its kind is an agent's (:data:`AGENT_KINDS`; the robot
+    and hand tracks score the agent), ``carried`` if an agent carried it
+    (``script.carries[].body``),
     ``knocked`` if it was kicked (``script.kicks[].body``), ``pushed`` if it is the push
     target (``push.target``), else ``other``.
 
@@ -78,7 +82,8 @@ def body_roles(scene: str | Path) -> dict[int, str]:
         if "body" not in v:
             continue
         body = str(v["body"])
-        roles[i] = ("carried" if body in carried else "knocked" if body in knocked
+        roles[i] = ("agent" if v.get("kind") in AGENT_KINDS
+                    else "carried" if body in carried else "knocked" if body in knocked
                     else "pushed" if body == pushed else "other")
     return roles
 
@@ -114,8 +119,8 @@ def iou_by_kind(per_scene: dict[str, dict], kinds: dict[str, dict[int, str]]
 
 
 _TABLES = {"by_kind": ("kind", "[mIoU by kind of body] (meta.json labels)"),
-           "by_role": ("role", "[mIoU by role of body] (meta.json script: carried, knocked, "
-                               "pushed, other)")}
+           "by_role": ("role", "[mIoU by role of body] (meta.json script: agent, carried, "
+                               "knocked, pushed, other)")}
 
 
 def format_kinds(results: dict[str, dict], block: str = "by_kind") -> str:
