@@ -7,7 +7,8 @@ import numpy as np
 from motionbits.eval import write_label_map
 from motionbits.eval.benchmark import run_benchmark
 from motionbits.eval.dataset import evaluate_dataset
-from motionbits.eval.kinds import body_kinds, body_roles, format_kinds, iou_by_kind
+from motionbits.eval.kinds import (body_kinds, body_kinds_and_roles, body_roles, format_breakdowns,
+                                  format_kinds, iou_by_kind)
 from test_eval_dataset import make_scene, squares
 
 
@@ -106,3 +107,6 @@ def test_benchmark_scores_each_role_and_the_bodies_missed(tmp_path):
     assert results["first"]["by_kind"]["pickplace"]["block"]["missed"] == 0.5
     text = format_kinds(results, "by_role")
     assert "role" in text and "100.0 (0%)" in text and "0.0 (100%)" in text
+    both = format_breakdowns(results)
+    assert both == format_kinds(results) + "\n" + text
+    assert body_kinds_and_roles(scene) == (body_kinds(scene), body_roles(scene))

@@ -85,7 +85,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     from motionbits.baselines import available_methods, make_method
     from motionbits.eval.benchmark import run_benchmark
-    from motionbits.eval.kinds import format_kinds
+    from motionbits.eval.kinds import format_breakdowns
     from motionbits.eval.table import format_table, json_ready
 
     if args.list:
@@ -124,11 +124,10 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled", seconds_per_frame=spf), end="")
-    for block in ("by_kind", "by_role"):  # scenes of motionbits synth name their bodies'
-        table = format_kinds(results, block)  # kinds and what the agents did to them
-        if table:
-            print()
-            print(table, end="")
+    breakdowns = format_breakdowns(results)
+    if breakdowns:  # scenes of motionbits synth name their bodies' kinds and roles
+        print()
+        print(breakdowns, end="")
     if args.json is not None:
         payload = {"methods": results, "seconds_per_frame": spf}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))

@@ -57,7 +57,7 @@ def parse_pred_spec(spec: str) -> tuple[str, Path]:
 
 def run(args: argparse.Namespace) -> int:
     from motionbits.eval.dataset import evaluate_dataset
-    from motionbits.eval.kinds import format_kinds
+    from motionbits.eval.kinds import format_breakdowns
     from motionbits.eval.table import format_table, json_ready
 
     if args.json is not None:
@@ -79,11 +79,10 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled"), end="")
-    for block in ("by_kind", "by_role"):  # scenes of motionbits synth name their bodies'
-        table = format_kinds(results, block)  # kinds and what the agents did to them
-        if table:
-            print()
-            print(table, end="")
+    breakdowns = format_breakdowns(results)
+    if breakdowns:  # scenes of motionbits synth name their bodies' kinds and roles
+        print()
+        print(breakdowns, end="")
     if args.json is not None:
         payload = next(iter(results.values())) if len(results) == 1 else {"methods": results}
         write_text_atomic(args.json, json.dumps(json_ready(payload), indent=1, allow_nan=False))

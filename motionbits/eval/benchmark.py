@@ -18,7 +18,7 @@ from tqdm import tqdm
 from motionbits.eval.dataset import (
     discover_scenes, load_scene, summarize_tracks,
 )
-from motionbits.eval.kinds import body_kinds, body_roles, iou_by_kind
+from motionbits.eval.kinds import body_kinds_and_roles, iou_by_kind
 from motionbits.eval.labelmaps import write_label_map
 from motionbits.eval.metrics import FrameScores, evaluate_frame
 from motionbits.objects import check_label_map
@@ -69,8 +69,7 @@ def run_benchmark(
     n_frames = 0
     for scene in tqdm(scenes, desc="benchmark", unit="scene", disable=not progress):
         frames, gt, ignore = load_scene(scene)  # the frames and gt.png fit together
-        kinds[scene.key] = body_kinds(scene.path)
-        roles[scene.key] = body_roles(scene.path)
+        kinds[scene.key], roles[scene.key] = body_kinds_and_roles(scene.path)
         n_frames += len(frames)
         for name, method in methods.items():
             if name in unavailable:

@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 from tqdm import tqdm
 
-from motionbits.eval.kinds import body_kinds, body_roles, iou_by_kind
+from motionbits.eval.kinds import body_kinds_and_roles, iou_by_kind
 from motionbits.eval.labelmaps import read_label_map
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 from motionbits.frames import whole_number
@@ -286,7 +286,6 @@ def evaluate_dataset(
             raise ValueError(f"scene {scene.key}: {exc}") from exc
         by_track.setdefault(scene.track, []).append(scores)
         per_scene[scene.key] = scores.to_dict()
-        kinds[scene.key] = body_kinds(scene.path)
-        roles[scene.key] = body_roles(scene.path)
+        kinds[scene.key], roles[scene.key] = body_kinds_and_roles(scene.path)
     return {**summarize_tracks(by_track), "per_scene": per_scene,
             "by_kind": iou_by_kind(per_scene, kinds), "by_role": iou_by_kind(per_scene, roles)}

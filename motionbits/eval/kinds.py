@@ -16,10 +16,9 @@ import json
 import math
 from pathlib import Path
 
-__all__ = ["body_kinds", "body_roles", "iou_by_kind", "format_kinds", "ROLES", "AGENT_KINDS"]
+__all__ = ["body_kinds", "body_roles", "body_kinds_and_roles", "iou_by_kind",
+           "format_kinds", "format_breakdowns", "AGENT_KINDS"]
 
-#: The roles :func:`body_roles` gives, in the order of precedence.
-ROLES = ("agent", "carried", "knocked", "pushed", "other")
 #: Kinds of the agents of ``motionbits synth`` (a gripper or hand scored as a body).
 AGENT_KINDS = frozenset({"gripper", "hand", "pusher"})
 
@@ -51,21 +50,34 @@ def body_kinds(scene: str | Path) -> dict[int, str]:
     kinds (``meta.json`` is free-form; a DAVIS window has none). An entry whose id is not
     a whole number >= 1 is skipped, not the scene's every kind.
     """
-    return {i: str(v["kind"]) for i, v in _labels(_meta(scene)).items() if "kind" in v}
+    return _kinds(_meta(scene))
 
 
 def body_roles(scene: str | Path) -> dict[int, str]:
-    """Ground-truth id -> role of the body (one of :data:`ROLES`), from a scene's
-    ``meta.json``: ``agent`` if its kind is an agent's (:data:`AGENT_KINDS`; the robot
-    and hand tracks score the agent), ``carried`` if an agent carried it
-    (``script.carries[].body``),
+    """Ground-truth id -> role of the body, from a scene's ``meta.json``, the first that
+    holds of: ``agent`` if its kind is an agent's (:data:`AGENT_KINDS`; the robot and hand
+    tracks score the agent), ``carried`` if an agent carried it (``script.carries[].body``),
     ``knocked`` if it was kicked (``script.kicks[].body``), ``pushed`` if it is the push
     target (``push.target``), else ``other``.
 
     Returns ``{}`` when the scene names no bodies (``labels.<id>.body``) or says nothing of
     what the agents did (no ``script`` and no ``push``): its roles are not known.
     """
+    return _roles(_meta(scene))
+
+
+def body_kinds_and_roles(scene: str | Path) -> tuple[dict[int, str], dict[int, str]]:
+    """:func:`body_kinds` and :func:`body_roles` of a scene, reading its ``meta.json``
+    once."""
     meta = _meta(scene)
+    return _kinds(meta), _roles(meta)
+
+
+def _kinds(meta: dict) -> dict[int, str]:
+    return {i: str(v["kind"]) for i, v in _labels(meta).items() if "kind" in v}
+
+
+def _roles(meta: dict) -> dict[int, str]:
     script, push = meta.get("script"), meta.get("push")
     if not isinstance(script, dict) and not isinstance(push, dict):
         return {}
@@ -149,3 +161,9 @@ def format_kinds(results: dict[str, dict], block: str = "by_kind") -> str:
             cells.append(f"{text:>{width + 2}}")
         lines.append(f"{t:<20}{k:<14}{n:>7}" + "".join(cells))
     return "\n".join(lines) + "\n"
+
+
+def format_breakdowns(results: dict[str, dict]) -> str:
+    """The tables of :func:`format_kinds` that the results have (kinds, then roles), a
+    blank line between them; ``""`` when none."""
+    return "\n".join(t for t in (format_kinds(results, b) for b in _TABLES) if t)
