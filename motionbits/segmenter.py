@@ -202,7 +202,7 @@ class MotionBitsSegmenter:
         self._memory = StaticMemory((hw, ww), self.config.reveal_tolerance,  # revealed.py
                                     self.config.reveal_covered)
         self._arrivals = Arrivals((hw, ww), self.config.reveal_covered,  # arrivals.py
-                                  self.config.carry_tolerance)
+                                  self.config.carry_tolerance, self.config.reveal_tolerance)
         self._first_look = FirstLook((hw, ww), self.config.reveal_covered)  # completion.py
 
     # ------------------------------------------------------------------ helpers
@@ -463,7 +463,8 @@ class MotionBitsSegmenter:
                 self._first_look.follow(world)
                 self._rest_marks.follow(world)
             labels, held, born, self._next_id = self._arrivals.place(
-                labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving),
+                labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving,
+                                            self._first_look),
                 moving, int(round(max(grid.cell))), self._next_id)
             earned = earned | held
             self._setdown.adopt(born, labels, grid.cell, moving)

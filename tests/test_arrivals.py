@@ -8,13 +8,14 @@ import pytest
 
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.arrivals import Arrivals
+from motionbits.completion import FirstLook
 from motionbits.setdown import SetDown
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
 SIZE = (240, 320)
 CONFIG = MotionBitsConfig(n_nodes=2500, max_side=max(SIZE))
 CELL = (6.4, 4.8)  # px of a grid cell: SETDOWN_CELLS of them is ~250 px
-COVERED, REST = 20.0, 12.0
+COVERED, REST, TOLERANCE = 20.0, 12.0, 10.0
 BLOCK = slice(40, 70), slice(50, 80)  # 30 x 30 px
 
 
@@ -32,7 +33,7 @@ def _gray(rgb: np.ndarray) -> np.ndarray:
 def _memory_after_a_pass(background: np.ndarray, parent: int = 7) -> Arrivals:
     """Arrivals that saw ``background`` still and unlabelled, then a MotionBit ``parent``
     cover the block's place."""
-    memory = Arrivals(background.shape[:2], COVERED, REST)
+    memory = Arrivals(background.shape[:2], COVERED, REST, TOLERANCE)
     labels = np.zeros(background.shape[:2], np.int32)
     memory.update(background, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     labels[BLOCK] = parent
@@ -69,7 +70,7 @@ def test_a_body_seen_moving_that_no_motionbit_followed_is_found_alone_and_whole(
     same block beside a MotionBit, or where nothing was seen moving, is left to the other
     rules."""
     table = _table(3)
-    memory = Arrivals(table.shape[:2], COVERED, REST)
+    memory = Arrivals(table.shape[:2], COVERED, REST, TOLERANCE)
     labels = np.zeros(table.shape[:2], np.int32)
     memory.update(table, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     block = slice(40, 70), slice(50, 84)
@@ -88,9 +89,68 @@ def test_a_body_seen_moving_that_no_motionbit_followed_is_found_alone_and_whole(
     beside = labels.copy()
     beside[40:70, 85:90] = 5  # a MotionBit touching it: not alone
     assert not _find(memory, now, beside)
-    fresh = Arrivals(table.shape[:2], COVERED, REST)  # nothing seen moving there
+    fresh = Arrivals(table.shape[:2], COVERED, REST, TOLERANCE)  # nothing seen moving there
     fresh.update(table, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     assert not _find(fresh, now)
+
+
+def _first_look_then(first: np.ndarray, now: np.ndarray, labels: np.ndarray | None = None,
+                     moved: bool = True) -> list[list]:
+    """What the third search (against the first look, ``first``) finds in ``now`` at two
+    frames in a row, once the arrivals' own memory has taken ``now`` for the static world
+    (it stood unlabelled one frame) and no MotionBit passed there; the flow saw motion
+    over the block's place (``moved``) or nowhere."""
+    labels = np.zeros(now.shape[:2], np.int32) if labels is None else labels
+    first_look = FirstLook(now.shape[:2], COVERED)
+    first_look.update(first, np.ones(labels.shape, bool), np.zeros(labels.shape, np.int32))
+    memory = Arrivals(now.shape[:2], COVERED, REST, TOLERANCE)
+    seen_moving = np.zeros(labels.shape, bool)
+    seen_moving[30:80, 40:90] = moved
+    memory.update(first, np.zeros(labels.shape, bool), labels, seen_moving)
+    memory.update(now, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
+    gray = _gray(now)
+    return [memory.find(now, gray, gray, labels, CELL, set(), first_look) for _ in range(2)]
+
+
+def test_a_body_the_memory_took_for_the_table_is_found_against_the_first_look():
+    """A block stood still unlabelled for a frame (the memory now holds it as the static
+    world) where the first look saw the table and the flow saw motion: found at the
+    second frame it stands there, as a new MotionBit."""
+    table = _table()
+    now = table.copy()
+    now[BLOCK] = (190, 50, 40)
+    first, second = _first_look_then(table, now)
+    assert first == []  # one frame at rest is not enough
+    (box, piece, parent), = second
+    found = np.zeros(table.shape[:2], bool)
+    found[box] = piece
+    # the 5x5 window of the difference reaches 2 px past the block (at most 34 x 34 px)
+    assert parent == 0 and found[BLOCK].mean() > 0.9 and found.sum() <= 34 * 34
+    # beside a MotionBit standing still that has been seen as large: the rest of it
+    labels = np.zeros(table.shape[:2], np.int32)
+    labels[36:74, 82:122] = 5  # 1,520 px
+    _, beside = _first_look_then(table, now, labels)
+    assert [p for _, _, p in beside] == [5]
+    # ... and beside a smaller one, neither its rest nor a body of its own
+    labels[:] = 0
+    labels[40:50, 82:92] = 5
+    assert _first_look_then(table, now, labels) == [[], []]
+
+
+@pytest.mark.parametrize("change", ["shadow", "uncovered", "nothing moved"])
+def test_what_is_not_a_body_is_not_found_against_the_first_look(change):
+    """A cast shadow (the first look, darker), the table a body left (it continues the
+    table around it), and a block where nothing was seen moving (a far facade under a
+    moving camera reads as changed) are not bodies that arrived."""
+    table = _table()
+    first, now = table.copy(), table.copy()
+    if change == "shadow":
+        now[BLOCK] = (now[BLOCK] * 0.5).astype(np.uint8)
+    elif change == "uncovered":
+        first[BLOCK] = (40, 60, 190)
+    else:
+        now[BLOCK] = (190, 50, 40)
+    assert _first_look_then(first, now, moved=change != "nothing moved") == [[], []]
 
 
 def test_a_shadow_left_behind_is_not_an_arrival():
@@ -167,7 +227,7 @@ def test_the_rest_of_a_body_standing_beside_its_mark_joins_it(seen, moving, gap,
     """A block set down is marked only on a third of it (where the carrier's motion
     showed); the rest of it stands where the table was seen, where no MotionBit passed."""
     table = _table()
-    memory = Arrivals(table.shape[:2], COVERED, REST)
+    memory = Arrivals(table.shape[:2], COVERED, REST, TOLERANCE)
     labels = np.zeros(table.shape[:2], np.int32)
     memory.update(table, np.ones(labels.shape, bool), labels,  # the table seen still
                   np.zeros(labels.shape, bool))
