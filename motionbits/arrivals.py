@@ -204,51 +204,47 @@ class Arrivals:
         # MotionBit; its pieces within JOIN_CELLS grid cells of each other are one body
         unfollowed = self.stirred & self.known & (labels == 0) & ~candidate
         searched = candidate | unfollowed
-        if not searched.any():
-            return self._unlike_first_look(cur, cur_gray, prev_gray, labels, cell, moving,
-                                           first_look, [])
-        # what looks unlike the remembered static world and stands still, once for both
-        # searches, on the box of their pixels (grown by the window's reach, so that its
-        # means are the whole image's)
-        around = grow_box(nonzero_box(searched), WINDOW // 2, labels.shape)
-        fresh = ((_color_difference(cur[around], self.background[around]) > self.covered)
-                 & (cv2.blur(cv2.absdiff(cur_gray[around], prev_gray[around]),
-                             (WINDOW, WINDOW)) < self.rest))
+        # what stands still, once for the three searches
+        at_rest = cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW)) < self.rest
         found = []
-        for at, piece, ring in self._pieces(candidate, fresh, around, cur, labels, cell):
-            beside = ring[standing[ring]]
-            body = int(np.bincount(beside).argmax()) if beside.size else 0
-            visited = self.visited[at][piece]
-            if body and piece.sum() <= self._largest.get(body, 0):
-                parent = body  # the rest of the body standing beside it
-            elif np.count_nonzero(visited) >= 0.5 * visited.size:  # where a MotionBit passed
-                parent = int(np.bincount(visited)[1:].argmax()) + 1
-            else:
-                continue
-            found.append((at, piece, parent))
-        for at, piece, ring in self._pieces(unfollowed, fresh, around, cur, labels, cell,
-                                            unfollowed=True):
-            if not ring.any():
-                found.append((at, piece, 0))
-        return found + self._unlike_first_look(cur, cur_gray, prev_gray, labels, cell, moving,
+        if searched.any():
+            # what looks unlike the remembered static world and stands still, once for
+            # both searches, on the box of their pixels (grown by the window's reach, so
+            # that its means are the whole image's)
+            around = grow_box(nonzero_box(searched), WINDOW // 2, labels.shape)
+            fresh = ((_color_difference(cur[around], self.background[around]) > self.covered)
+                     & at_rest[around])
+            for at, piece, ring in self._pieces(candidate, fresh, around, cur, labels, cell):
+                body = _beside(ring, standing)
+                visited = self.visited[at][piece]
+                if body and piece.sum() <= self._largest.get(body, 0):
+                    parent = body  # the rest of the body standing beside it
+                elif np.count_nonzero(visited) >= 0.5 * visited.size:  # a MotionBit passed
+                    parent = int(np.bincount(visited)[1:].argmax()) + 1
+                else:
+                    continue
+                found.append((at, piece, parent))
+            for at, piece, ring in self._pieces(unfollowed, fresh, around, cur, labels, cell,
+                                                unfollowed=True):
+                if not ring.any():
+                    found.append((at, piece, 0))
+        return found + self._unlike_first_look(cur, at_rest, labels, cell, standing,
                                                first_look, found)
 
-    def _unlike_first_look(self, cur: np.ndarray, cur_gray: np.ndarray,
-                           prev_gray: np.ndarray, labels: np.ndarray,
-                           cell: tuple[float, float], moving: set[int],
+    def _unlike_first_look(self, cur: np.ndarray, at_rest: np.ndarray, labels: np.ndarray,
+                           cell: tuple[float, float], standing: np.ndarray,
                            first_look: FirstLook | None, found: list[Arrival]
                            ) -> list[Arrival]:
-        """The third search (module docstring): unlabelled pieces at rest, not among
-        ``found``, mostly where something moved, that differ from ``first_look`` now and
-        did at the last frame, stand out from their surroundings where the first look did
-        not, and are beside no MotionBit standing still that is smaller (arguments as
-        :meth:`find`)."""
+        """The third search (module docstring): unlabelled pieces ``at_rest`` ((H, W)
+        bool), not among ``found``, mostly where something moved, that differ from
+        ``first_look`` now and did at the last frame, stand out from their surroundings
+        where the first look did not, and are beside no MotionBit standing still
+        (``standing``: id -> bool) that is smaller (other arguments as :meth:`find`)."""
         before, self._unlike_first = self._unlike_first, None
         if first_look is None or not first_look.known.any():
             return []
-        unlike = (first_look.known & (labels == 0)
-                  & (_color_difference(cur, first_look.look) > self.covered)
-                  & (cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW)) < self.rest))
+        unlike = (first_look.known & (labels == 0) & at_rest
+                  & (_color_difference(cur, first_look.look) > self.covered))
         for at, piece, _ in found:
             unlike[at][piece] = False
         side = max(1, int(round(COMPACT_CELLS * max(cell))))
@@ -263,7 +259,7 @@ class Arrivals:
             x, y, w, h = stats[1:][large, :4].T
             box = grow_box((slice(y.min(), (y + h).max()), slice(x.min(), (x + w).max())),
                            SHADOW_WINDOW + side, labels.shape)
-            unlike[box] &= first_look.changed(cur, box) & ~dimmed(
+            unlike[box] &= ~first_look.relit(cur, box) & ~dimmed(
                 cur, first_look.look, first_look.known, box, self.tolerance)
             opened = cv2.morphologyEx(unlike.view(np.uint8), cv2.MORPH_OPEN, square)
             n, comp, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
@@ -283,10 +279,7 @@ class Arrivals:
                     or np.count_nonzero(self.passed[at][piece]) < 0.5 * area  # nothing moved there
                     or not _stands_out(cur, first_look, labels, at, piece)):
                 continue
-            around, ring = _ring(labels.shape, at, piece, 0, TOUCH)
-            beside = labels[around][ring]
-            beside = beside[(beside > 0) & ~np.isin(beside, list(moving))]
-            parent = int(np.bincount(beside).argmax()) if beside.size else 0
+            parent = _beside(_touching(labels, at, piece), standing)
             if parent and area > self._largest.get(parent, 0):
                 continue  # larger than the body standing beside it: not its rest
             pieces.append((at, piece, parent))
@@ -338,9 +331,7 @@ class Arrivals:
                     or _like_surroundings(cur, labels, at, piece,
                                           None if self._followed else self.background)):
                 continue
-            around, ring = _ring(labels.shape, at, piece, 0, TOUCH)
-            ring = labels[around][ring]  # the labels it touches
-            pieces.append((at, piece, ring[ring > 0]))
+            pieces.append((at, piece, _touching(labels, at, piece)))
         return pieces
 
     def place(self, labels: np.ndarray, arrivals: list[Arrival], moving: set[int], reach: int,
@@ -420,6 +411,21 @@ def _ring(shape: tuple[int, ...], box: tuple[slice, slice], piece: np.ndarray, n
     return around, outer > inner
 
 
+def _touching(labels: np.ndarray, box: tuple[slice, slice], piece: np.ndarray) -> np.ndarray:
+    """(k,) int32 labels (> 0) of the (H, W) ``labels`` within ``TOUCH`` px of ``piece``
+    (bool, in the image box ``box``), one per touching pixel."""
+    around, ring = _ring(labels.shape, box, piece, 0, TOUCH)
+    ring = labels[around][ring]
+    return ring[ring > 0]
+
+
+def _beside(touching: np.ndarray, standing: np.ndarray) -> int:
+    """The id standing still (``standing``: id -> bool) that ``touching`` ((k,) ids,
+    :func:`_touching`) names most often; 0 if none."""
+    beside = touching[standing[touching]]
+    return int(np.bincount(beside).argmax()) if beside.size else 0
+
+
 def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
     """Whether the (h, w) bool ``piece`` of (h, w, 3) uint8 ``now`` is ``then`` under other
     light: the same chromaticity and, after one gain, the same grey levels."""
@@ -430,12 +436,16 @@ def _relit(now: np.ndarray, then: np.ndarray, piece: np.ndarray) -> bool:
 
 
 def surroundings_colour(cur: np.ndarray, labels: np.ndarray, box: tuple[slice, slice],
-                        piece: np.ndarray) -> np.ndarray | None:
+                        piece: np.ndarray, known: np.ndarray | None = None
+                        ) -> np.ndarray | None:
     """(3,) float64 mean colour in ``cur`` ((H, W, 3) uint8) of the unlabelled ring
     ``SURROUND_RING`` around ``piece`` (bool, in the image box ``box`` of the (H, W)
-    ``labels``); None where fewer than ``SURROUND_MIN`` such pixels surround it."""
+    ``labels``), only where ``known`` ((H, W) bool; None: everywhere); None where fewer
+    than ``SURROUND_MIN`` such pixels surround it."""
     around_box, ring = _ring(labels.shape, box, piece, *SURROUND_RING)
     ring &= labels[around_box] == 0
+    if known is not None:
+        ring &= known[around_box]
     if np.count_nonzero(ring) < SURROUND_MIN:
         return None
     return cur[around_box][ring].mean(axis=0)
@@ -447,19 +457,17 @@ def _stands_out(cur: np.ndarray, first_look: FirstLook, labels: np.ndarray,
     surroundings (``SURROUND_RING``) in ``cur`` by ``SURROUND_DIFFERENCE`` (mean colour,
     largest channel) and by ``FIRST_LOOK_CONTRAST`` times as much as in the first look,
     where the first look knows ``SURROUND_MIN`` of those surroundings."""
-    around, ring = _ring(labels.shape, box, piece, *SURROUND_RING)
-    ring &= labels[around] == 0
-    if np.count_nonzero(ring) < SURROUND_MIN:
+    around = surroundings_colour(cur, labels, box, piece)
+    if around is None:
         return False
-    now = np.abs(cur[box][piece].mean(axis=0) - cur[around][ring].mean(axis=0)).max()
+    now = np.abs(cur[box][piece].mean(axis=0) - around).max()
     if now < SURROUND_DIFFERENCE:
         return False
-    ring &= first_look.known[around]
+    around = surroundings_colour(first_look.look, labels, box, piece, first_look.known)
     inside = piece & first_look.known[box]
-    if np.count_nonzero(ring) < SURROUND_MIN or not inside.any():
+    if around is None or not inside.any():
         return True
-    then = np.abs(first_look.look[box][inside].mean(axis=0)
-                  - first_look.look[around][ring].mean(axis=0)).max()
+    then = np.abs(first_look.look[box][inside].mean(axis=0) - around).max()
     return bool(now >= FIRST_LOOK_CONTRAST * then)
 
 

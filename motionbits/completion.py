@@ -372,15 +372,20 @@ class FirstLook:
 
     def changed(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
-        ``rgb`` that look otherwise than first seen, other than by a cast shadow (the
-        same chromaticity within ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the
-        brightness, ``SHADOW_WINDOW`` means)."""
-        now, then = rgb[box], self.look[box]
-        changed = self.known[box] & (_color_difference(now, then) > self.covered)
+        ``rgb`` that look otherwise than first seen, other than by a cast shadow
+        (:meth:`relit`)."""
+        changed = self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
+        return changed & ~self.relit(rgb, box)
+
+    def relit(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+        """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
+        ``rgb`` that look as first seen under a cast shadow: the same chromaticity within
+        ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the brightness
+        (``SHADOW_WINDOW`` means)."""
         window = (SHADOW_WINDOW, SHADOW_WINDOW)
-        chroma, gain, _, _ = light_change(cv2.blur(now, window), cv2.blur(then, window))
-        return changed & ~((chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0])
-                           & (gain < SHADOW_GAIN[1]))
+        chroma, gain, _, _ = light_change(cv2.blur(rgb[box], window),
+                                          cv2.blur(self.look[box], window))
+        return (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
 
 
 def _iou(a: tuple[tuple[slice, slice], np.ndarray],
