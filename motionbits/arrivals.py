@@ -255,7 +255,8 @@ class Arrivals:
         large = stats[1:, cv2.CC_STAT_AREA] >= min_area
         if large.any():
             # not where the first look is under a cast shadow now: tested only around the
-            # pieces large enough (the tests' windows cost more than all the rest)
+            # pieces large enough (the shadow tests' windowed means cost more than the rest
+            # of this search on the whole frame)
             x, y, w, h = stats[1:][large, :4].T
             box = grow_box((slice(y.min(), (y + h).max()), slice(x.min(), (x + w).max())),
                            SHADOW_WINDOW + side, labels.shape)
