@@ -55,7 +55,7 @@ from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _col
 
 __all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "WIDER",
            "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE", "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED",
-           "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST", "UNCOVERED_IOU"]
+           "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST", "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
@@ -69,11 +69,20 @@ WIDER = 2.0
 COMPLETION_MARGIN = 8
 COMPLETION_FRAME = 2
 #: GrabCut runs on the box scaled down to at most this many px on its longer side (its
-#: time grows with the box's pixels; at 64 px mIoU fell by 0.2-0.5) ...
-COMPLETION_SIDE = 96
+#: time grows with the box's pixels; at 64 px mIoU fell by 0.2-0.5; 96 until round 42,
+#: whose boxes of 200-300 px came back in blocks of 2-3 px: 192 read +0.5 / +0.8 mIoU on
+#: 239 moving-camera pick-and-place scenes, docs/results.md, "Finer cuts, and cuts that
+#: also trim (round 42)") ...
+COMPLETION_SIDE = 192
 #: ... for this many iterations (2: the same mIoU on the last frames of the pickplace
 #: and seed-7 robot / hand scenes).
 COMPLETION_ITERATIONS = 1
+#: A mark at rest loses the pixels the cut gives to the background (pieces that an
+#: opening by a ``TRIM_OPEN`` px square keeps) when they are under this share of it: the
+#: table beside a block that its motion's mask took along (a larger share is a cut that
+#: went wrong, and the mark is left as its motion gives it).
+TRIM_SHARE = 0.5
+TRIM_OPEN = 3
 #: px: a pixel the cut gives to a body is the table under a shadow where it has the
 #: chromaticity of the background within this window, dimmed (:func:`_shadowed`).
 COMPLETION_SHADOW_WINDOW = 31
@@ -136,8 +145,9 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
-        colours take within its box, where they stay off the box's frame
-        (``label_map`` itself if none takes any).
+        colours take within its box, where they stay off the box's frame, and a mask at
+        rest less the pixels they give to the background (``TRIM_SHARE``)
+        (``label_map`` itself if nothing changes).
     """
     if not label_map.any():
         if memory is not None:
@@ -156,15 +166,16 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         cut = None if memory is None or label in moving else memory.recall(label_map, label,
                                                                              box, rgb)
         if cut is None:
-            cut = _cut(label_map, label, box, rgb, out, first_look)
+            cut = _cut(label_map, label, box, rgb, out, first_look, trim=label not in moving)
         if cut is None:
             continue
         if label not in moving:
             found[label] = cut
-        new = cut.body & (out[cut.rows, cut.cols] == 0)
         if out is label_map:
             out = label_map.copy()
-        out[cut.rows, cut.cols][new] = label
+        sub = out[cut.rows, cut.cols]
+        sub[cut.body & (sub == 0)] = label
+        sub[(sub == label) & ~cut.body] = 0  # what the cut trimmed
     if memory is not None:
         memory.keep(found)
     return out
@@ -183,24 +194,27 @@ class _Cut:
 
 
 def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.ndarray,
-         out: np.ndarray, first_look: FirstLook | None = None) -> _Cut | None:
+         out: np.ndarray, first_look: FirstLook | None = None, trim: bool = False
+         ) -> _Cut | None:
     """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
     around it, where no mask of ``out`` is yet -- starting on the body's side, with the
-    mask, from what looks otherwise than ``first_look`` saw there; None where it finds
-    none. A cut that runs out to its box's frame is tried once more in a box
+    mask, from what looks otherwise than ``first_look`` saw there -- less, if ``trim``,
+    the mask's pixels it gives to the background (``TRIM_SHARE``); None where it changes
+    nothing. A cut that runs out to its box's frame is tried once more in a box
     ``WIDER`` times as far out: a top face's mark may be a small part of its body."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
     for share in (COMPLETION_REACH, WIDER * COMPLETION_REACH):
         cut, ran_out = _cut_within(label_map, label, grow_box(
-            box, int(share * side) + COMPLETION_MARGIN, label_map.shape), rgb, out, first_look)
+            box, int(share * side) + COMPLETION_MARGIN, label_map.shape), rgb, out, first_look,
+            trim)
         if not ran_out:
             return cut
     return None
 
 
 def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
-                rgb: np.ndarray, out: np.ndarray, first_look: FirstLook | None
-                ) -> tuple[_Cut | None, bool]:
+                rgb: np.ndarray, out: np.ndarray, first_look: FirstLook | None,
+                trim: bool = False) -> tuple[_Cut | None, bool]:
     """:func:`_cut` in the image box ``around``: (the cut or None, whether it ran out to
     the box's frame)."""
     rows, cols = around
@@ -216,17 +230,32 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
         return None, False
+    kept = _trimmed(mask, body) if trim else mask
     # the pieces of the cut that hold mask pixels, where no mask is yet
-    new = pieces_holding(body & (free | mask), mask) & free
+    new = pieces_holding(body & (free | kept), kept) & free
     if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
         new &= ~_shadowed(rgb[rows, cols], free & ~new)
     if not new.any():
-        return None, False
+        if kept is mask:
+            return None, False
+        return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept), False
     # a cut that runs out to its box's frame found no body's rest (a plain table) --
     # or the box was too small for it
     if _reaches_frame(new):
         return None, True
-    return _Cut(rows, cols, mask, rgb[rows, cols].copy(), mask | new), False
+    return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept | new), False
+
+
+def _trimmed(mask: np.ndarray, body: np.ndarray) -> np.ndarray:
+    """(h, w) bool ``mask`` less its pixels outside the cut's ``body`` ((h, w) bool), in
+    pieces an opening by ``TRIM_OPEN`` px keeps, when they are under ``TRIM_SHARE`` of it
+    (``mask`` itself otherwise)."""
+    gone = mask & ~body
+    if not gone.any() or np.count_nonzero(gone) >= TRIM_SHARE * np.count_nonzero(mask):
+        return mask
+    gone = cv2.morphologyEx(gone.view(np.uint8), cv2.MORPH_OPEN,
+                            np.ones((TRIM_OPEN, TRIM_OPEN), np.uint8)) > 0
+    return mask & ~gone if gone.any() else mask
 
 
 class CutMemory:

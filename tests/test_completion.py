@@ -330,3 +330,28 @@ def test_another_mark_s_pixels_do_not_seed_the_body_s_colours():
     out = complete_masks(labels, rgb, first_look=first_look)
     assert (out[100:140, 100:140] == 2).mean() > 0.95
     assert (out[140:165, 100:140] == 2).mean() < 0.1  # (its edge row: the cut's 96 px)
+
+
+def test_a_mark_at_rest_loses_the_table_its_motion_took_along_and_a_moving_one_keeps_it():
+    """The block's whole mask plus a strip of table beside it (the flow's smear): at rest
+    the cut gives the strip back to the background; a moving mark only ever grows."""
+    rgb, body, labels = _scene()
+    smeared = np.zeros_like(labels)
+    smeared[body] = 3
+    smeared[84:136, 180:192] = 3  # 12 px of table on the block's right
+    out = complete_masks(smeared, rgb)
+    assert (out[body] == 3).all()
+    assert (out[84:136, 182:192] == 0).all()
+    grad = gradient_magnitude(cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32))
+    moving = complete_masks(smeared, rgb, moving={3}, gradient=grad)
+    assert (moving[smeared == 3] == 3).all()
+
+
+def test_a_cut_that_would_take_most_of_a_mark_away_leaves_it_as_it_is():
+    """A mark mostly on table (the cut would keep under half of it) is not trimmed."""
+    rgb, body, labels = _scene()
+    mostly_table = np.zeros_like(labels)
+    mostly_table[130:140, 120:180] = 3  # 10 rows of block ...
+    mostly_table[140:180, 120:180] = 3  # ... and 40 of table under it
+    out = complete_masks(mostly_table, rgb)
+    assert (out[mostly_table == 3] == 3).all()
