@@ -223,8 +223,10 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
     f = COMPLETION_FRAME
     trimap[f:-f, f:-f] = cv2.GC_PR_BGD
+    relit = None  # the scene first seen there, under a cast shadow now
     if first_look is not None:  # (another mark's pixels are not this body's)
-        trimap[first_look.changed(rgb, (rows, cols)) & (trimap == cv2.GC_PR_BGD)
+        relit = first_look.known[rows, cols] & first_look.relit(rgb, (rows, cols))
+        trimap[first_look.changed(rgb, (rows, cols), relit) & (trimap == cv2.GC_PR_BGD)
                & free] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
     body = _grab_cut(rgb[rows, cols], trimap)
@@ -233,8 +235,10 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     kept = _trimmed(mask, body) if trim else mask
     # the pieces of the cut that hold mask pixels, where no mask is yet
     new = pieces_holding(body & (free | kept), kept) & free
-    if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour)
-        new &= ~_shadowed(rgb[rows, cols], free & ~new)
+    if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour),
+        new &= ~_shadowed(rgb[rows, cols], free & ~new)  # by the colours around it
+        if relit is not None:  # ... and by the scene first seen there (round 42)
+            new &= ~relit
     if not new.any():
         if kept is mask:
             return None, False
@@ -399,12 +403,13 @@ class FirstLook:
         self._uncovered = found
         return sorted(found)
 
-    def changed(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+    def changed(self, rgb: np.ndarray, box: tuple[slice, slice],
+                relit: np.ndarray | None = None) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
         ``rgb`` that look otherwise than first seen, other than by a cast shadow
-        (:meth:`relit`)."""
+        (:meth:`relit`; or ``relit``, (h, w) bool, where the caller has it already)."""
         changed = self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
-        return changed & ~self.relit(rgb, box)
+        return changed & ~(self.relit(rgb, box) if relit is None else relit)
 
     def relit(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame

@@ -355,3 +355,47 @@ def test_a_cut_that_would_take_most_of_a_mark_away_leaves_it_as_it_is():
     mostly_table[140:180, 120:180] = 3  # ... and 40 of table under it
     out = complete_masks(mostly_table, rgb)
     assert (out[mostly_table == 3] == 3).all()
+
+
+def test_a_cut_does_not_take_the_table_first_seen_there_under_a_shadow(monkeypatch):
+    """Whatever the cut's colour models take, the pixels that show the table as first
+    seen, dimmed by a cast shadow, are not added to the body (the colours around a pixel
+    miss a shadow in a patch of the table's other colour, or too broad for its lit
+    surroundings to be near)."""
+    import motionbits.completion as completion
+
+    table = _table()
+    rgb = table.copy()
+    body = np.zeros((240, 320), bool)
+    body[80:140, 120:160] = True
+    shadow = np.zeros_like(body)
+    shadow[80:140, 160:180] = True
+    rgb[shadow] = (table[shadow] * 0.5).astype(np.uint8)
+    rgb[body] = (90, 30, 110)
+    labels = np.zeros((240, 320), np.int32)
+    labels[84:136, 124:156] = 3
+    first = FirstLook((240, 320), covered=20.0)
+    first.update(table, np.ones((240, 320), bool), np.zeros((240, 320), np.int32))
+    box = {}
+
+    def cut_takes_the_shadow(image, trimap):  # the body and its shadow, in the cut's box
+        taken = np.zeros(trimap.shape, bool)
+        taken[box["rows"], box["cols"]] = True
+        return taken
+
+    real = completion._cut_within
+
+    def within(label_map, label, around, *args):
+        box["rows"] = slice(80 - around[0].start, 140 - around[0].start)
+        box["cols"] = slice(120 - around[1].start, 180 - around[1].start)
+        return real(label_map, label, around, *args)
+
+    monkeypatch.setattr(completion, "_grab_cut", cut_takes_the_shadow)
+    monkeypatch.setattr(completion, "_cut_within", within)
+    monkeypatch.setattr(completion, "_shadowed", lambda rgb, background: np.zeros(
+        rgb.shape[:2], bool))  # the colours around miss it
+    out = complete_masks(labels, rgb, first_look=first)
+    assert (out[body] == 3).all()
+    assert (out[84:136, 166:180] == 0).all()  # but within the shadow windows' reach of the body
+    plain = complete_masks(labels, rgb)  # without the first look the shadow is taken
+    assert (plain[shadow] == 3).mean() > 0.95
