@@ -31,6 +31,12 @@ the body's model instead of the background's; pixels that still look as first se
 on the background's side unless their colours say otherwise (the body's top may be the
 table's colour).
 
+A mark at rest also gives back the pixels of its own mask that the cut puts on the
+background's side, when they are under ``TRIM_SHARE`` of it (the table beside a block
+that its motion's mask took along); a moving mark only grows. Within a stream, no cut
+adds a pixel that shows the scene first seen there under a cast shadow
+(:meth:`FirstLook.relit`; round 42).
+
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
 on the mark's exact outline, and a block at rest was completed at one frame and not at
@@ -184,8 +190,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
 @dataclass(frozen=True)
 class _Cut:
     """The body GrabCut found for a mask: its pixels ``body`` (h, w) bool within the box
-    (``rows``, ``cols``), the mask's and those the cut added, from the mask (h, w) bool on
-    the (h, w, 3) uint8 image ``rgb`` of that box."""
+    (``rows``, ``cols``), the mask's (less those a trim took) and those the cut added,
+    from the mask (h, w) bool on the (h, w, 3) uint8 image ``rgb`` of that box."""
     rows: slice
     cols: slice
     mask: np.ndarray
