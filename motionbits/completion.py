@@ -181,7 +181,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             out = label_map.copy()
         sub = out[cut.rows, cut.cols]
         sub[cut.body & (sub == 0)] = label
-        sub[(sub == label) & ~cut.body] = 0  # what the cut trimmed
+        if label not in moving:  # what a trim took (a moving mark's cut only grows it)
+            sub[(sub == label) & ~cut.body] = 0
     if memory is not None:
         memory.keep(found)
     return out
