@@ -47,6 +47,7 @@ per pair); nothing grows with the video's length except the number of ids.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from functools import cache
 
 import cv2
@@ -58,7 +59,8 @@ from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
 
 __all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "standing_still", "seen_still",
-           "drop_seen_still", "observe_touching", "DROP_WIDTH", "MIN_MOVED"]
+           "drop_seen_still", "observe_touching", "join_convex", "apply_joins", "DROP_WIDTH", "MIN_MOVED",
+           "CONVEX_SOLIDITY", "CONVEX_BORDER", "CONVEX_AREA_RATIO"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
 STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
@@ -80,6 +82,17 @@ BORN_FRESH = 0.5
 #: pairs across them agreed at this many times as many frames, summed, as there are such
 #: pairs. Seed 0 robot / hand: spurious per scene 0.825 / 0.925 -> 0.775 / 0.875 (round 16).
 OUTWEIGH = 3
+
+#: Two marks at rest that touch are one body when their union fills at least this share of
+#: its convex hull (:func:`join_convex`): a block's top face and its sides, a cylinder's
+#: top and its side, shown as two marks once set down (round 43).
+CONVEX_SOLIDITY = 0.9
+#: ... and they share at least this share of the shorter of their two outlines (a corner
+#: of contact is not one body) ...
+CONVEX_BORDER = 0.1
+#: ... and the larger is at most this many times the smaller (the faces of one body are
+#: of a size: a block beside a large mark spilled over the table is not its face).
+CONVEX_AREA_RATIO = 4.0
 
 #: px (working resolution): :func:`drop_seen_still` leaves slivers thinner than this. On
 #: the planar demo clip a translating quad lost a sliver of its leading edge at every
@@ -181,6 +194,82 @@ def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
             key = np.unique(np.minimum(a, b) * (1 << 31) + np.maximum(a, b))
             pairs.update((int(k >> 31), int(k & ((1 << 31) - 1))) for k in key)
     return pairs
+
+
+def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGroups
+                ) -> list[tuple[int, int]]:
+    """Pairs of marks at rest that are one body by their shape: they touch along at least
+    ``CONVEX_BORDER`` of the shorter outline, the larger is at most ``CONVEX_AREA_RATIO``
+    times the smaller, and together they fill ``CONVEX_SOLIDITY`` of their union's convex
+    hull. Each such pair not known to disagree (:meth:`MotionBitGroups.known`)
+    is recorded in ``groups`` as agreeing, so that later frames show them as one.
+
+    The faces of a body that its motion or its arrival marked apart (a block's top face
+    and its sides, seen from above at an angle) stand still side by side once it is set
+    down: no motion tells them apart or together any more. Two bodies at rest side by
+    side rarely fill their union's hull (the rigid bodies of the generated tracks are
+    blocks, cylinders and balls; a shadow beside a block makes an L).
+
+    Args:
+        shown: (H, W) int32 marks shown, under their group labels (0 = none).
+        moving: group labels moving now (not joined).
+        groups: the merging state; updated in place.
+
+    Returns:
+        (keep, drop) pairs, keep < drop, in the order found; a label may occur in several.
+    """
+    square = np.ones((3, 3), np.uint8)
+    joined = []
+    for a, b in sorted(touching_pairs(shown, 1)):
+        if a in moving or b in moving or groups.known(a, b):
+            continue
+        box = nonzero_box((shown == a) | (shown == b))
+        sub = shown[box]
+        mask_a, mask_b = (sub == a).view(np.uint8), (sub == b).view(np.uint8)
+        area_a, area_b = np.count_nonzero(mask_a), np.count_nonzero(mask_b)
+        if max(area_a, area_b) > CONVEX_AREA_RATIO * min(area_a, area_b):
+            continue
+        border = np.count_nonzero((cv2.dilate(mask_a, square) > 0) & (mask_b > 0))
+        if border < CONVEX_BORDER * min(_outline_length(mask_a), _outline_length(mask_b)):
+            continue
+        union = mask_a | mask_b
+        contours, _ = cv2.findContours(union, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        hull = cv2.contourArea(cv2.convexHull(np.vstack(contours)))
+        if area_a + area_b >= CONVEX_SOLIDITY * max(hull, 1.0):
+            groups.observe(a, b, 0.0)
+            joined.append((a, b))
+    return joined
+
+
+def apply_joins(shown: np.ndarray, rep: dict[int, int], pairs: list[tuple[int, int]]
+                ) -> tuple[np.ndarray, dict[int, int]]:
+    """``shown`` (H, W) int32 and ``rep`` (id -> group label) with each pair's labels
+    under one, the smallest of those joined to it (``pairs`` from :func:`join_convex`);
+    both unchanged (the same objects) when ``pairs`` is empty."""
+    if not pairs:
+        return shown, rep
+    under: dict[int, int] = {}
+
+    def root(label: int) -> int:
+        while label in under:
+            label = under[label]
+        return label
+
+    for a, b in pairs:
+        a, b = root(a), root(b)
+        if a != b:
+            under[max(a, b)] = min(a, b)
+    final = {label: root(label) for label in under}
+    lut = np.arange(int(max(shown.max(initial=0), *final)) + 1, dtype=np.int32)
+    for label, to in final.items():
+        lut[label] = to
+    return lut[shown], {i: final.get(r, r) for i, r in rep.items()}
+
+
+def _outline_length(mask: np.ndarray) -> float:
+    """px: the length of the longest outer outline of the (h, w) uint8 0/1 ``mask``."""
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    return max(cv2.arcLength(c, True) for c in contours) if contours else 0.0
 
 
 def fit_affine(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray) -> np.ndarray:

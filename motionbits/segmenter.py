@@ -39,8 +39,8 @@ from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, drop_labels, fit_cluster_motions,
                               hide_edgeless, hide_small, hide_thin, remove_specks, snap_to_edges,
                               trim_flat_background)
-from motionbits.merging import (MIN_MOVED, MotionBitGroups, drop_seen_still, observe_touching,
-                                seen_still, standing_still)
+from motionbits.merging import (MIN_MOVED, MotionBitGroups, apply_joins, drop_seen_still,
+                                join_convex, observe_touching, seen_still, standing_still)
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.numbering import ShownNumbers, by_number
@@ -565,6 +565,9 @@ class MotionBitsSegmenter:
                 shown = drop_labels(shown, self._first_look.uncovered(shown, cur, still_marks))
             # stripes are not a body (the flow along a wood grain's lines)
             shown = hide_thin(shown, int(np.ceil(max(grid.cell))))
+            # marks at rest side by side that make one convex body are one (its faces,
+            # marked apart and set down: nothing moves to tell)
+            shown, rep = apply_joins(shown, rep, join_convex(shown, moving_marks, self._groups))
             # each mark under the number its body was shown under (the state keeps the
             # groups' representatives)
             numbers, self._next_id = self._numbers.assign(shown, with_links, rep,

@@ -9,8 +9,9 @@ import motionbits.segmenter as segmenter_module
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
 from motionbits.masks import hide_small, hide_thin
-from motionbits.merging import (OUTWEIGH, MotionBitGroups, drop_seen_still, observe_touching,
-                                seen_still, standing_still, touching_pairs)
+from motionbits.merging import (OUTWEIGH, MotionBitGroups, apply_joins, drop_seen_still,
+                                join_convex, observe_touching, seen_still, standing_still,
+                                touching_pairs)
 from motionbits.nodes import NodeGrid
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -550,3 +551,49 @@ def test_drop_seen_still_drops_only_places_seen_still_since_the_motionbit_moved(
     assert (out == expected).all()
     # seen still only before 1 first moved: nothing goes
     assert (drop_seen_still(labels.copy(), prior, still_seen, {1: 5}) == labels).all()
+
+
+def _faces(shape=(60, 80)):
+    """A block seen from above at an angle, as two marks: its top face (2) and, below it,
+    its side (5); a third mark (7) far away."""
+    shown = np.zeros(shape, np.int32)
+    shown[10:22, 20:50] = 2
+    shown[22:40, 20:50] = 5
+    shown[45:55, 60:75] = 7
+    return shown
+
+
+def test_join_convex_joins_the_faces_of_a_body_at_rest_under_the_smaller_label():
+    shown = _faces()
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    pairs = join_convex(shown, set(), groups)
+    assert pairs == [(2, 5)]
+    rep = {2: 2, 3: 5, 5: 5, 7: 7}
+    joined, new_rep = apply_joins(shown, rep, pairs)
+    assert set(np.unique(joined)) == {0, 2, 7}
+    assert np.count_nonzero(joined == 2) == np.count_nonzero((shown == 2) | (shown == 5))
+    assert new_rep == {2: 2, 3: 2, 5: 2, 7: 7}
+    # recorded as an agreement: the next frame's groups show them as one
+    assert groups.representatives([2, 5, 7]) == {2: 2, 5: 2, 7: 7}
+
+
+def test_join_convex_leaves_moving_marks_l_shapes_corners_and_disagreeing_pairs():
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    shown = _faces()
+    assert join_convex(shown, {5}, groups) == []  # one of them moves: its motion decides
+    ell = shown.copy()
+    ell[22:40, 20:50] = 0
+    ell[10:40, 50:58] = 5  # a shadow beside the block: together an L
+    assert join_convex(ell, set(), groups) == []
+    corner = np.zeros((60, 80), np.int32)
+    corner[10:30, 10:30] = 2
+    corner[30:50, 30:50] = 5  # two blocks touching at a corner
+    assert join_convex(corner, set(), groups) == []
+    spilled = _faces()
+    spilled[22:60, 0:80] = 5  # a mark spilled over the table below the block's top
+    assert join_convex(spilled, set(), groups) == []
+    groups.forbid(2, [5])  # known to be two bodies
+    assert join_convex(shown, set(), groups) == []
+    rep = {2: 2, 5: 5}
+    same_shown, same_rep = apply_joins(shown, rep, [])
+    assert same_shown is shown and same_rep is rep
