@@ -41,6 +41,10 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   it was born out of still pixels or inherited (:meth:`MotionBitGroups.forbid`), which
   no agreement outweighs. A group that loses a member splits again.
 
+Once a body is set down, nothing moves to compare: two marks shown at rest side by side
+that together fill their convex hull, of a size with each other, are one body
+(:func:`join_convex`: a block's top face and its sides, marked apart; round 43).
+
 State is one small set of id pairs per relation (and a count of frames beyond the margin
 per pair); nothing grows with the video's length except the number of ids.
 """
@@ -59,8 +63,8 @@ from motionbits.nodes import NodeGrid
 from motionbits.twists import rigid_matrix
 
 __all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "standing_still", "seen_still",
-           "drop_seen_still", "observe_touching", "join_convex", "apply_joins", "DROP_WIDTH", "MIN_MOVED",
-           "CONVEX_SOLIDITY", "CONVEX_BORDER", "CONVEX_AREA_RATIO"]
+           "drop_seen_still", "observe_touching", "join_convex", "apply_joins", "DROP_WIDTH",
+           "MIN_MOVED", "CONVEX_SOLIDITY", "CONVEX_BORDER", "CONVEX_AREA_RATIO"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
 STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
