@@ -222,13 +222,18 @@ def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGro
     Returns:
         (keep, drop) pairs, keep < drop, in the order found; a label may occur in several.
     """
+    boxes = label_boxes(shown)
+    at_rest = [i + 1 for i, box in enumerate(boxes) if box is not None and i + 1 not in moving]
+    if len(at_rest) < 2:  # no pair at rest
+        return []
     square = np.ones((3, 3), np.uint8)
     joined = []
     for a, b in sorted(touching_pairs(shown, 1)):
         if a in moving or b in moving or groups.known(a, b):
             continue
-        box = nonzero_box((shown == a) | (shown == b))
-        sub = shown[box]
+        (ra, ca), (rb, cb) = boxes[a - 1], boxes[b - 1]
+        sub = shown[min(ra.start, rb.start):max(ra.stop, rb.stop),
+                    min(ca.start, cb.start):max(ca.stop, cb.stop)]
         mask_a, mask_b = (sub == a).view(np.uint8), (sub == b).view(np.uint8)
         area_a, area_b = np.count_nonzero(mask_a), np.count_nonzero(mask_b)
         if max(area_a, area_b) > CONVEX_AREA_RATIO * min(area_a, area_b):
