@@ -12,7 +12,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.aperture import flat_regions
+from motionbits.aperture import GROUND_SHARE, flat_regions
 from motionbits.boxes import at_border, grow_box, label_areas, label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
@@ -61,13 +61,6 @@ FACE_MASK_SHARE = 0.6
 #: 19) an arm or hand took the table squares it crossed (64.2 / 64.2 / 51.4).
 CLOSED_FACE_SHARE = 0.35
 CLOSED_FACE_GROWTH = 2.0
-#: ... but a flat region that reaches the image border and covers at least this share of
-#: the image is the ground or a wall (a plain white table): a mask that covers less than
-#: ``FACE_MASK_SHARE`` of it loses its pixels there. Fast motion smears the flow over
-#: a third of such a table, more than ``HALO_MASK_SHARE`` (``02_cups.mp4``, 16 frames:
-#: the table's pixels under a mark 6.3% -> 0.5% on average, 38% -> 0.6% at the worst
-#: frame; round 32).
-GROUND_SHARE = 0.1
 
 
 def fit_cluster_motions(points: np.ndarray, back_points: np.ndarray, weights: np.ndarray,

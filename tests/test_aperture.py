@@ -99,3 +99,42 @@ def test_a_join_stays_with_the_group_of_the_piece_that_made_it():
     # under the piece's own id, the join is lost once the piece is gone
     alone = carried_joins(with_links, made, {})
     assert (_join(rest, rest, moving=False, joined=alone)[0:70, 72:84] == 0).all()
+
+
+def _wide_scene(shift: int) -> np.ndarray:
+    """(H, W, 3) uint8: the textured block at rows 70-99 (+ ``shift``) below a plain,
+    nearly flat surface over the whole width from the top border (a white table or wall,
+    45% of the image) whose faint texture moves with the block (smeared flow)."""
+    frame = _scene(shift)
+    faint = cv2.GaussianBlur(np.random.default_rng(5).normal(0, 20, (H + 40, W)), (0, 0), 4)
+    top = 70 + shift
+    frame[:top] = np.clip(np.array((200, 200, 190)) + faint[40 - shift:40 - shift + top, :, None],
+                          0, 255).astype(np.uint8)
+    return frame
+
+
+def test_the_ground_or_a_wall_never_joins(monkeypatch):
+    """A flat region reaching the border over GROUND_SHARE of the image is the ground or
+    a wall, not a link, even where the smeared flow moves it with a body (02_cups.mp4: the
+    white table joined to the person's mark, 28% of the frame; round 44)."""
+    import motionbits.aperture as aperture
+
+    prev, cur = _wide_scene(0), _wide_scene(3)
+    flow = np.zeros((H, W, 2), np.float32)
+    flow[0:103, :, 1] = -3.0
+    labels = np.zeros((H, W), np.int32)
+    labels[72:103, 57:99] = 1
+
+    def join():
+        return join_flat_regions(
+            labels, np.array([1]), np.zeros(1), np.array([[0.0, -3.0]]), cur, _gray(cur),
+            _gray(prev), np.abs(_gray(cur) - _gray(prev)),
+            cv2.magnitude(flow[..., 0], flow[..., 1]), np.zeros((H, W), np.int32),
+            move_threshold=0.6, min_area=60)
+
+    surface = np.s_[0:65, :]
+    assert flat_regions(cur)[0][surface].mean() > 0.95
+    assert (join()[surface] == 0).all()
+    # the motion explains it as it does the bar: only its size keeps it out
+    monkeypatch.setattr(aperture, "GROUND_SHARE", 1.0)
+    assert (join()[surface] == 1).mean() > 0.9
