@@ -10,6 +10,8 @@ A shown MotionBit is therefore extended over a flat image region (colour gradien
 - touches the MotionBit's mask and reaches the image border (a link entering the view: a
   flat region inside the view is closed by edges across the motion, which the motion
   moves, and a table or wall around a body is mostly static);
+- covers less than ``GROUND_SHARE`` of the image (a larger one reaching the border is the
+  ground or a wall, which smeared flow next to a fast body can move with it);
 - moves by the flow (more than ``move_threshold``) over ``MOVING_SHARE`` of its area;
 - shows no visible change (``STILL_LEVELS``), yet the MotionBit's motion explains it and a
   band around it (its own edges) better than "nothing moved" by ``GAIN`` grey levels.
