@@ -56,6 +56,8 @@ from functools import cache
 
 import cv2
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from motionbits.boxes import label_boxes, nonzero_box
 from motionbits.evidence import photometric_residual
@@ -257,19 +259,13 @@ def apply_joins(shown: np.ndarray, rep: dict[int, int], pairs: list[tuple[int, i
     both unchanged (the same objects) when ``pairs`` is empty."""
     if not pairs:
         return shown, rep
-    under: dict[int, int] = {}
-
-    def root(label: int) -> int:
-        while label in under:
-            label = under[label]
-        return label
-
-    for a, b in pairs:
-        a, b = root(a), root(b)
-        if a != b:
-            under[max(a, b)] = min(a, b)
-    final = {label: root(label) for label in under}
-    lut = np.arange(int(max(shown.max(initial=0), *final)) + 1, dtype=np.int32)
+    ends = np.array(pairs, np.int64)  # (P, 2)
+    _, comp = connected_components(coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])),
+                                              shape=(ends.max() + 1,) * 2), directed=False)
+    smallest = np.full(comp.max() + 1, np.iinfo(np.int64).max)
+    np.minimum.at(smallest, comp[ends.ravel()], ends.ravel())
+    final = {int(i): int(smallest[comp[i]]) for i in np.unique(ends) if smallest[comp[i]] != i}
+    lut = np.arange(int(max(shown.max(initial=0), ends.max())) + 1, dtype=np.int32)
     for label, to in final.items():
         lut[label] = to
     return lut[shown], {i: final.get(r, r) for i, r in rep.items()}
