@@ -54,14 +54,16 @@ import cv2
 import numpy as np
 
 from motionbits.arrivals import SURROUND_DIFFERENCE, surroundings_colour
-from motionbits.boxes import at_border, grow_box, label_boxes, nonzero_box, pieces_holding
-from motionbits.masks import EDGELESS_GRADIENT, outline_gradient
+from motionbits.boxes import (at_border, grow_box, label_areas, label_boxes, nonzero_box,
+                              pieces_holding)
+from motionbits.masks import EDGELESS_GRADIENT, drop_labels, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
                                  follow_known, follow_look, light_change)
 
-__all__ = ["complete_masks", "CutMemory", "FirstLook", "COMPLETION_REACH", "WIDER",
+__all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook", "COMPLETION_REACH", "WIDER",
            "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE", "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED",
-           "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST", "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN"]
+           "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST", "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN",
+           "TOUCH_SHARE"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
@@ -127,12 +129,17 @@ UNCOVERED_CONTRAST = 2.5
 #: A mark found uncovered (:meth:`FirstLook.uncovered`) stays found while it overlaps the
 #: mark found at the last frame by this intersection over union.
 UNCOVERED_IOU = 0.5
+#: A mark too small to show that completion grew past the minimum
+#: (:func:`complete_small_marks`) is the rest of the body of a mark it touches along this
+#: share of its outline or more, and takes that mark's label (round 45).
+TOUCH_SHARE = 0.25
 
 
 def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[int] = (),
                    gradient: np.ndarray | None = None,
                    memory: CutMemory | None = None,
-                   first_look: FirstLook | None = None) -> np.ndarray:
+                   first_look: FirstLook | None = None,
+                   labels: Collection[int] | None = None) -> np.ndarray:
     """Grow each mask that reaches no image border over the rest of its body (GrabCut):
     every mask at rest, a moving one where its outline stops inside its body.
 
@@ -148,6 +155,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             in place; None: every mask is cut anew.
         first_look: the scene as first seen in the stream (:class:`FirstLook`); None:
             the cut starts from the mask alone.
+        labels: the masks to grow; None: all.
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
@@ -164,7 +172,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
     found: dict[int, _Cut] = {}  # the cuts of the marks at rest, for the memory
     for i, box in enumerate(label_boxes(label_map)):
         label = i + 1
-        if box is None or border[label]:
+        if box is None or border[label] or (labels is not None and label not in labels):
             continue
         if label in moving and (gradient is None or not _open_outline(label_map, label, box,
                                                                       gradient)):
@@ -185,6 +193,55 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             sub[(sub == label) & ~cut.body] = 0
     if memory is not None:
         memory.keep(found)
+    return out
+
+
+def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndarray,
+                         min_area: float, moving: Collection[int] = (),
+                         gradient: np.ndarray | None = None,
+                         first_look: FirstLook | None = None) -> np.ndarray:
+    """The marks hidden as smaller than ``min_area``, grown by :func:`complete_masks` after
+    the others (where no other mark is), and shown where their body then covers
+    ``min_area``: a body set down is marked where its carrier's motion showed on it, and
+    the trims may leave that part small. One that touches another mark along
+    ``TOUCH_SHARE`` of its outline or more is the rest of that mark's body and takes its
+    label (one body, one mark).
+
+    Args:
+        pieces: (H, W) int32 labels before the small marks were hidden (0 = background).
+        label_map: (H, W) int32 labels shown, the others completed.
+        rgb: (H, W, 3) uint8 frame at the same size.
+        min_area: px, the area a mark must cover to be shown.
+        moving, gradient, first_look: as for :func:`complete_masks`.
+
+    Returns:
+        (H, W) int32 label map (``label_map`` itself if no mark was hidden).
+    """
+    hidden = np.setdiff1d(np.unique(pieces), np.unique(label_map))
+    hidden = hidden[hidden > 0]
+    put = np.isin(pieces, hidden) & (label_map == 0)
+    if not put.any():
+        return label_map
+    both = label_map.copy()
+    both[put] = pieces[put]
+    out = complete_masks(both, rgb, moving, gradient, None, first_look,
+                         labels={int(label) for label in hidden})
+    area = label_areas(out)
+    out = drop_labels(out, [label for label in hidden
+                            if label >= area.size or area[label] < min_area])
+    boxes = label_boxes(out, int(hidden[-1]))
+    ring = np.ones((3, 3), np.uint8)
+    for label in hidden:
+        box = boxes[label - 1]
+        if box is None:
+            continue
+        rows, cols = grow_box(box, 1, out.shape)
+        sub = out[rows, cols]
+        mask = sub == label
+        around = sub[(cv2.dilate(mask.view(np.uint8), ring) > 0) & ~mask]
+        others = around[(around > 0) & (around != label)]
+        if others.size and others.size >= TOUCH_SHARE * around.size:
+            sub[mask] = np.bincount(others).argmax()
     return out
 
 

@@ -20,7 +20,7 @@ from motionbits.backend import make_ops
 from motionbits.boxes import label_areas, nonzero_box, run_counts
 from motionbits.camera import compensate_camera
 from motionbits.colours import snap_to_colours
-from motionbits.completion import CutMemory, FirstLook, complete_masks
+from motionbits.completion import CutMemory, FirstLook, complete_masks, complete_small_marks
 from motionbits.config import MotionBitsConfig
 from motionbits.evidence import (
     appearance_consistent, forgive_misalignment, gradient_magnitude, motion_gain, pull_back,
@@ -540,17 +540,21 @@ class MotionBitsSegmenter:
                                   int(round(cfg.edge_band * max(grid.cell))))
             # a mask is shown if its outline is an image edge (a mask left on a flat table
             # looks like the table around it) and, once its overhangs onto flat background
-            # are trimmed, it still covers MIN_SHOWN_CELLS grid cells (smaller ones are
-            # flow noise, or a sliver of smeared flow); its outline goes where its colours
-            # end (flow is smooth across a moving body's outline)
+            # are trimmed and it is completed, it covers MIN_SHOWN_CELLS grid cells
+            # (smaller ones are flow noise, or a sliver of smeared flow); its outline goes
+            # where its colours end (flow is smooth across a moving body's outline)
             shown = trim_flat_background(hide_edgeless(shown, gradient), cur, half_gradient)
-            shown = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
-            shown = hide_small(shown, MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1])
+            pieces = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
+            min_shown = MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1]
             # and each mark seen whole takes the rest of its body by colour (a moving one
-            # only where its outline stops inside its body)
+            # only where its outline stops inside its body) -- the small ones last, where
+            # the others left room, and only those that then cover MIN_SHOWN_CELLS
             moving_marks = {rep[i] for i in moving if rep.get(i)}  # shown labels moving now
-            shown = complete_masks(shown, cur, moving_marks, gradient,
-                                   self._cuts, self._first_look if calm is not None else None)
+            first_look = self._first_look if calm is not None else None
+            shown = complete_masks(hide_small(pieces, min_shown), cur, moving_marks, gradient,
+                                   self._cuts, first_look)
+            shown = complete_small_marks(pieces, shown, cur, min_shown, moving_marks,
+                                         gradient, first_look)
             # without the static world under a cast shadow (which moves with its body)
             shown = trim_shadows(shown, shadows)
             # a mark at rest that the steps above hid (they turn on the state's frayed

@@ -3,7 +3,8 @@
 import cv2
 import numpy as np
 
-from motionbits.completion import FirstLook, complete_masks
+from motionbits import completion
+from motionbits.completion import FirstLook, complete_masks, complete_small_marks
 from motionbits.evidence import gradient_magnitude
 
 
@@ -41,6 +42,37 @@ def test_a_partial_mask_takes_the_rest_of_its_body_and_none_of_the_table():
     assert (out[body] == 3).mean() > 0.97
     assert (out[~body] == 0).all()
     assert (labels == 3).sum() == 24 * 60  # the input is not written to
+
+
+def test_a_mark_too_small_to_show_is_shown_once_completed_over_its_body():
+    """A body set down is marked where its carrier's motion showed on it; trimmed to
+    960 px, under the 1000 px a mark must cover, it is completed (after the marks shown)
+    and shown over its body -- and not shown where even its body is under the minimum."""
+    rgb, body, _ = _scene()
+    pieces = np.zeros((240, 320), np.int32)
+    pieces[116:140, 130:170] = 3
+    shown = np.zeros_like(pieces)  # the small mark hidden
+    out = complete_small_marks(pieces, shown, rgb, 1000)
+    assert (out[body] == 3).mean() > 0.97 and (out[~body] == 0).all()
+    assert not complete_small_marks(pieces, shown, rgb, 4000).any()  # the block: 3600 px
+    assert complete_small_marks(pieces, pieces, rgb, 1000) is pieces  # none hidden
+
+
+def test_a_small_mark_completed_beside_another_mark_on_its_body_joins_that_mark(monkeypatch):
+    """One body, one mark: the block's top third is shown as mark 5, and a small mark on
+    its lower part, completed, touches mark 5 along its top -- it takes label 5 (with a
+    touch of the whole outline asked for, it would stay a second mark)."""
+    rgb, body, _ = _scene()
+    shown = np.zeros((240, 320), np.int32)
+    shown[80:100, 120:180] = 5
+    pieces = shown.copy()
+    pieces[116:140, 130:170] = 3
+    out = complete_small_marks(pieces, shown, rgb, 1000)
+    assert 3 not in out
+    assert (out[body] == 5).mean() > 0.97 and (out[~body] == 0).all()
+    monkeypatch.setattr(completion, "TOUCH_SHARE", 1.0)
+    out = complete_small_marks(pieces, shown, rgb, 1000)
+    assert (out[body] == 3).mean() > 0.6 and (out[body] == 5).mean() > 0.3
 
 
 def test_no_completion_for_a_mask_at_the_border_nor_over_another_mask():
