@@ -21,7 +21,7 @@ from motionbits.twists import kabsch_2d, rigid_matrix
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "drop_labels",
            "hide_small", "hide_edgeless", "outline_gradient", "snap_to_edges",
            "trim_flat_background", "SPECK_CELLS", "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT",
-           "HALO_MASK_SHARE", "hide_thin", "THIN_SHARE"]
+           "HALO_MASK_SHARE", "hide_thin", "THIN_SHARE", "THIN_PIECE_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...
@@ -35,6 +35,10 @@ SPECK_CELLS = 2
 #: A mark of which an opening by a square of one grid cell (rounded up) keeps less than
 #: this share is stripes, not a body (:func:`hide_thin`).
 THIN_SHARE = 0.25
+#: A detached piece of a mark, other than its largest, of which that opening keeps less
+#: than this share is not shown (:func:`hide_thin`): a sliver of a shadow's edge or of a
+#: grain line that took the mark's label, away from its body (round 45).
+THIN_PIECE_SHARE = 0.5
 #: grey levels per px (Sobel, 5x5 mean; :func:`motionbits.evidence.gradient_magnitude`): a
 #: mask whose outline shows less image gradient than this over all but
 #: ``1 - OUTLINE_QUANTILE`` of it, within ``OUTLINE_BAND`` px, is edgeless ...
@@ -279,9 +283,10 @@ def hide_small(label_map: np.ndarray, min_area: float) -> np.ndarray:
 
 
 def hide_thin(label_map: np.ndarray, side: int) -> np.ndarray:
-    """Zero every label of which an opening by a ``side`` x ``side`` square keeps less than
-    ``THIN_SHARE`` of its pixels: stripes, not a body (the flow along a wood grain's lines
-    or a shadow's edge under a moving camera).
+    """Zero every detached piece of a label, other than its largest, of which an opening by
+    a ``side`` x ``side`` square keeps less than ``THIN_PIECE_SHARE``, and then every label
+    of which the opening keeps less than ``THIN_SHARE`` of its pixels: stripes, not a
+    body (the flow along a wood grain's lines or a shadow's edge under a moving camera).
 
     Args:
         label_map: (H, W) int32 labels (0 = background).
@@ -291,17 +296,27 @@ def hide_thin(label_map: np.ndarray, side: int) -> np.ndarray:
         (H, W) int32 label map (``label_map`` itself if nothing is hidden).
     """
     square = np.ones((side, side), np.uint8)
-    boxes = label_boxes(label_map)
+    out = label_map
     thin = []
-    for i, box in enumerate(boxes, start=1):
+    for i, box in enumerate(label_boxes(label_map), start=1):
         if box is None:
             continue
         mark = (label_map[box] == i).view(np.uint8)
-        kept = cv2.countNonZero(cv2.morphologyEx(mark, cv2.MORPH_OPEN, square,
-                                                 borderType=cv2.BORDER_CONSTANT, borderValue=0))
-        if kept < THIN_SHARE * cv2.countNonZero(mark):
+        opened = cv2.morphologyEx(mark, cv2.MORPH_OPEN, square,
+                                  borderType=cv2.BORDER_CONSTANT, borderValue=0)
+        n, pieces, stats, _ = cv2.connectedComponentsWithStats(mark, connectivity=8)
+        area = stats[:, cv2.CC_STAT_AREA]
+        kept = np.bincount(pieces[opened > 0], minlength=n)  # px each piece keeps
+        stripes = np.flatnonzero(kept < THIN_PIECE_SHARE * area)
+        stripes = stripes[(stripes > 0) & (stripes != np.argmax(area[1:]) + 1)]
+        if len(stripes):
+            if out is label_map:
+                out = label_map.copy()
+            out[box][np.isin(pieces, stripes)] = 0
+        if kept[1:].sum() - kept[stripes].sum() < THIN_SHARE * (area[1:].sum()
+                                                                  - area[stripes].sum()):
             thin.append(i)
-    return drop_labels(label_map, thin)
+    return drop_labels(out, thin)
 
 
 def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,

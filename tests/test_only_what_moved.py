@@ -412,6 +412,21 @@ def test_hide_thin_zeroes_stripes_and_keeps_bodies():
     assert set(np.unique(hide_thin(labels, 8))) == {0, 2}  # the rod is thinner than 8 px
 
 
+def test_hide_thin_zeroes_the_slivers_apart_from_a_body_s_mark():
+    """A block's mark that also took a sliver of a shadow's edge away from the block (3 px
+    wide) is shown without the sliver; a compact piece apart from it (a face the sliver
+    does not join) stays, and so does a sliver touching the block."""
+    labels = np.zeros((120, 160), np.int32)
+    labels[10:40, 10:40] = 2  # the block
+    labels[80:83, 20:120] = 2  # a shadow's edge, apart
+    labels[60:72, 100:112] = 2  # a compact piece, apart
+    labels[20:23, 40:70] = 2  # a sliver touching the block
+    out = hide_thin(labels, 7)
+    assert not out[80:83].any()
+    assert (out[labels != 2] == 0).all() and (out[10:40, 10:40] == 2).all()
+    assert (out[60:72, 100:112] == 2).all() and (out[20:23, 40:70] == 2).all()
+
+
 def test_a_motionbit_trimmed_below_the_minimum_is_not_shown(monkeypatch):
     """The minimum area holds for the mask shown, after it is trimmed to the image's
     edges, not for the motion's mask before (a sliver of smeared flow that the edges
