@@ -9,9 +9,11 @@ edges) within a box around it: the pixels the cut gives to the body, joined to t
 and not another mask's, are the body's too -- unless they run out to the box's frame
 (a mark spilled onto a plain table would take the table as far as the box goes; the cut
 is then tried once more in a box twice as far out, for a mark on a small part of its
-body, such as a block's top face whose sides run past the first box). This
-is the last step on the shown masks (after specks and small marks are hidden: a speck
-grown by its colours would be shown); the segmenter's state keeps the motion's masks.
+body, such as a block's top face whose sides run past the first box). The
+marks too small to show are completed last (:func:`complete_small_marks`), where no
+other mark is, and shown only if their body then covers the smallest shown size; one that
+touches another mark is the rest of that mark's body and joins it. The segmenter's state
+keeps the motion's masks.
 
 The mark of a MotionBit moving now is completed only where at least
 ``OPEN_OUTLINE_SHARE`` of its outline runs where the image shows no edge: there the mask
