@@ -205,9 +205,10 @@ def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndar
     """The marks hidden as smaller than ``min_area``, grown by :func:`complete_masks` after
     the others (where no other mark is), and shown where their body then covers
     ``min_area``: a body set down is marked where its carrier's motion showed on it, and
-    the trims may leave that part small. One that touches another mark along
-    ``TOUCH_SHARE`` of its outline or more is the rest of that mark's body and takes its
-    label (one body, one mark).
+    the trims may leave that part small. One that stands as ``first_look`` saw it is not
+    shown (nothing moved there). One that touches another mark along ``TOUCH_SHARE`` of
+    its outline or more is the rest of that mark's body and takes its label (one body,
+    one mark) -- if it is not larger than that mark; otherwise it is not shown.
 
     Args:
         pieces: (H, W) int32 labels before the small marks were hidden (0 = background).
@@ -235,6 +236,9 @@ def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndar
     area = label_areas(out)
     out = drop_labels(out, [label for label in hidden
                             if label >= area.size or area[label] < min_area])
+    if first_look is not None:  # nothing moved where one stands as first seen
+        out = drop_labels(out, np.intersect1d(first_look.as_first_seen(out, rgb), hidden))
+    area = label_areas(out)
     boxes = label_boxes(out, int(hidden[-1]))
     ring = np.ones((3, 3), np.uint8)
     for label in hidden:
@@ -247,7 +251,10 @@ def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndar
         around = sub[(cv2.dilate(mask.view(np.uint8), ring) > 0) & ~mask]
         others = around[(around > 0) & (around != label)]
         if others.size and others.size >= TOUCH_SHARE * around.size:
-            sub[mask] = np.bincount(others).argmax()
+            # the rest of a body is not larger than the mark it joins (a wall panel
+            # grown out of a speck beside an arm's mark is not the arm)
+            joined = np.bincount(others).argmax()
+            sub[mask] = joined if area[joined] >= area[label] else 0
     return out
 
 

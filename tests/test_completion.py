@@ -64,7 +64,7 @@ def test_a_small_mark_completed_beside_another_mark_on_its_body_joins_that_mark(
     touch of the whole outline asked for, it would stay a second mark)."""
     rgb, body, _ = _scene()
     shown = np.zeros((240, 320), np.int32)
-    shown[80:100, 120:180] = 5
+    shown[80:115, 120:180] = 5
     pieces = shown.copy()
     pieces[116:140, 130:170] = 3
     out = complete_small_marks(pieces, shown, rgb, 1000)
@@ -72,7 +72,32 @@ def test_a_small_mark_completed_beside_another_mark_on_its_body_joins_that_mark(
     assert (out[body] == 5).mean() > 0.97 and (out[~body] == 0).all()
     monkeypatch.setattr(completion, "TOUCH_SHARE", 1.0)
     out = complete_small_marks(pieces, shown, rgb, 1000)
-    assert (out[body] == 3).mean() > 0.6 and (out[body] == 5).mean() > 0.3
+    assert (out[body] == 3).mean() > 0.3 and (out[body] == 5).mean() > 0.5
+
+
+def test_a_small_mark_grown_larger_than_the_mark_it_touches_is_not_shown():
+    """The rest of a body is not larger than the mark it joins: a piece grown to 1900 px
+    beside a mark of 600 px (a wall panel grown out of a speck beside an arm's mark) is
+    not shown, and the mark it touches stays as it was."""
+    rgb, body, _ = _scene()
+    shown = np.zeros((240, 320), np.int32)
+    shown[80:90, 120:180] = 5
+    pieces = shown.copy()
+    pieces[116:140, 130:170] = 3
+    out = complete_small_marks(pieces, shown, rgb, 1000)
+    assert 3 not in out and ((out == 5) == (shown == 5)).all()
+
+
+def test_a_small_mark_on_a_body_that_stands_as_first_seen_is_not_shown():
+    """Nothing moved where a completed small mark stands as first seen: a speck of flow
+    on a static block is not grown into a mark of the block."""
+    rgb, body, _ = _scene()
+    pieces = np.zeros((240, 320), np.int32)
+    pieces[116:140, 130:170] = 3
+    shown = np.zeros_like(pieces)
+    assert (complete_small_marks(pieces, shown, rgb, 1000)[body] == 3).mean() > 0.97
+    first = _first_look(rgb, (slice(0, 0), slice(0, 0)))  # the block was there
+    assert not complete_small_marks(pieces, shown, rgb, 1000, first_look=first).any()
 
 
 def test_no_completion_for_a_mask_at_the_border_nor_over_another_mask():
