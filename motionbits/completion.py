@@ -62,10 +62,10 @@ from motionbits.masks import EDGELESS_GRADIENT, drop_labels, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
                                  follow_known, follow_look, light_change)
 
-__all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook", "COMPLETION_REACH", "WIDER",
-           "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE", "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED",
-           "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST", "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN",
-           "TOUCH_SHARE"]
+__all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook",
+           "COMPLETION_REACH", "WIDER", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE",
+           "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED", "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST",
+           "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN", "TOUCH_SHARE"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
