@@ -58,15 +58,22 @@ def test_a_mark_too_small_to_show_is_shown_once_completed_over_its_body():
     assert complete_small_marks(pieces, pieces, rgb, 1000) is pieces  # none hidden
 
 
+def _small_mark_beside(rows: slice) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The red block of :func:`_scene`, shown as mark 5 over ``rows`` of it, and a mark 3
+    of 960 px on its lower part, too small to show: (rgb, body, shown, pieces)."""
+    rgb, body, _ = _scene()
+    shown = np.zeros((240, 320), np.int32)
+    shown[rows, 120:180] = 5
+    pieces = shown.copy()
+    pieces[116:140, 130:170] = 3
+    return rgb, body, shown, pieces
+
+
 def test_a_small_mark_completed_beside_another_mark_on_its_body_joins_that_mark(monkeypatch):
     """One body, one mark: the block's top third is shown as mark 5, and a small mark on
     its lower part, completed, touches mark 5 along its top -- it takes label 5 (with a
     touch of the whole outline asked for, it would stay a second mark)."""
-    rgb, body, _ = _scene()
-    shown = np.zeros((240, 320), np.int32)
-    shown[80:115, 120:180] = 5
-    pieces = shown.copy()
-    pieces[116:140, 130:170] = 3
+    rgb, body, shown, pieces = _small_mark_beside(slice(80, 115))
     out = complete_small_marks(pieces, shown, rgb, 1000)
     assert 3 not in out
     assert (out[body] == 5).mean() > 0.97 and (out[~body] == 0).all()
@@ -76,14 +83,10 @@ def test_a_small_mark_completed_beside_another_mark_on_its_body_joins_that_mark(
 
 
 def test_a_small_mark_grown_larger_than_the_mark_it_touches_is_not_shown():
-    """The rest of a body is not larger than the mark it joins: a piece grown to 1900 px
+    """The rest of a body is not larger than the mark it joins: a piece grown to 3000 px
     beside a mark of 600 px (a wall panel grown out of a speck beside an arm's mark) is
     not shown, and the mark it touches stays as it was."""
-    rgb, body, _ = _scene()
-    shown = np.zeros((240, 320), np.int32)
-    shown[80:90, 120:180] = 5
-    pieces = shown.copy()
-    pieces[116:140, 130:170] = 3
+    rgb, _, shown, pieces = _small_mark_beside(slice(80, 90))
     out = complete_small_marks(pieces, shown, rgb, 1000)
     assert 3 not in out and ((out == 5) == (shown == 5)).all()
 
