@@ -35,8 +35,8 @@ from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
 __all__ = ["flat_regions", "half_colour_gradient", "join_flat_regions", "carried_joins",
-           "FLAT_GRADIENT", "MOVING_SHARE", "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE",
-           "GROUND_SHARE"]
+           "reaches_border", "ground_regions", "FLAT_GRADIENT", "MOVING_SHARE",
+           "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE", "GROUND_SHARE"]
 
 #: grey levels per px: a pixel whose colour gradient (largest over R, G, B) is below this
 #: is flat.
@@ -66,6 +66,20 @@ KEPT_SHARE = 0.5
 #: 6.3% -> 0.5% on average, 38% -> 0.6% at the worst frame; round 32). The links joined
 #: on 80 generated robot and hand scenes cover at most 5% of the image (round 44).
 GROUND_SHARE = 0.1
+
+
+def reaches_border(stats: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """(R,) bool: which regions of :func:`flat_regions`' ``stats`` ((R, 5) int32, OpenCV's
+    component stats) reach the border of an image of ``shape`` (H, W)."""
+    x, y, w, h = (stats[:, i] for i in range(4))
+    return (x == 0) | (y == 0) | (x + w >= shape[1]) | (y + h >= shape[0])
+
+
+def ground_regions(stats: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """(R,) bool: which regions of :func:`flat_regions`' ``stats`` are the ground or a
+    wall -- they reach the border of the (H, W) image and cover ``GROUND_SHARE`` of it."""
+    return reaches_border(stats, shape) & (stats[:, cv2.CC_STAT_AREA]
+                                           >= GROUND_SHARE * shape[0] * shape[1])
 
 
 def half_colour_gradient(rgb: np.ndarray) -> np.ndarray:
@@ -147,9 +161,9 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     free = run_counts(regions[labels == 0], n) / area >= 0.5
     h, w = labels.shape
     x, y, bw, bh = (stats[:, i] for i in range(4))  # each region's box
-    border = (x == 0) | (y == 0) | (x + bw >= w) | (y + bh >= h)
-    ground = border & (area >= GROUND_SHARE * h * w)  # the ground or a wall: no link
-    eligible = (stats[:, cv2.CC_STAT_AREA] >= min_area) & free & ~ground
+    border = reaches_border(stats, labels.shape)
+    # the ground or a wall is no link
+    eligible = (area >= min_area) & free & ~ground_regions(stats, labels.shape)
     eligible[0] = False  # not a region: the pixels that are not flat
     new = eligible & border & (moving_share >= MOVING_SHARE)
     was = joined > 0

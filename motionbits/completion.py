@@ -238,7 +238,6 @@ def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndar
                             if label >= area.size or area[label] < min_area])
     if first_look is not None:  # nothing moved where one stands as first seen
         out = drop_labels(out, np.intersect1d(first_look.as_first_seen(out, rgb), hidden))
-    area = label_areas(out)
     boxes = label_boxes(out, int(hidden[-1]))
     ring = np.ones((3, 3), np.uint8)
     for label in hidden:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.aperture import GROUND_SHARE, flat_regions
+from motionbits.aperture import flat_regions, ground_regions, reaches_border
 from motionbits.boxes import at_border, grow_box, label_areas, label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
@@ -307,14 +307,15 @@ def hide_thin(label_map: np.ndarray, side: int) -> np.ndarray:
         n, pieces, stats, _ = cv2.connectedComponentsWithStats(mark, connectivity=8)
         area = stats[:, cv2.CC_STAT_AREA]
         kept = np.bincount(pieces[opened > 0], minlength=n)  # px each piece keeps
-        stripes = np.flatnonzero(kept < THIN_PIECE_SHARE * area)
-        stripes = stripes[(stripes > 0) & (stripes != np.argmax(area[1:]) + 1)]
-        if len(stripes):
+        stripe = kept < THIN_PIECE_SHARE * area
+        stripe[[0, np.argmax(area[1:]) + 1]] = False  # the background; the largest piece
+        if stripe.any():
             if out is label_map:
                 out = label_map.copy()
-            out[box][np.isin(pieces, stripes)] = 0
-        if kept[1:].sum() - kept[stripes].sum() < THIN_SHARE * (area[1:].sum()
-                                                                  - area[stripes].sum()):
+            out[box][stripe[pieces]] = 0
+        left = ~stripe
+        left[0] = False  # what is left of the mark
+        if kept[left].sum() < THIN_SHARE * area[left].sum():
             thin.append(i)
     return drop_labels(out, thin)
 
@@ -360,11 +361,10 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     region, label = regions.ravel()[at], label_map.ravel()[at]
     pair = region.astype(np.int64) * (int(label_map.max()) + 1) + label
     share = np.bincount(pair)[pair] / area[region]
-    x, y, w, h = (stats[region, i] for i in range(4))
-    closed = (x > 0) & (y > 0) & (x + w < label_map.shape[1]) & (y + h < label_map.shape[0])
+    closed = ~reaches_border(stats, label_map.shape)[region]
     # a large flat region that leaves the image is the ground or a wall: a mask keeps its
     # pixels there only if it holds most of it (a body's own face), not a halo's share
-    ground = ~closed & (area[region] >= GROUND_SHARE * label_map.size)
+    ground = ground_regions(stats, label_map.shape)[region]
     out = label_map.astype(np.int32, copy=True)
     out.ravel()[at[(share < HALO_MASK_SHARE) | (ground & (share < FACE_MASK_SHARE))]] = 0
     # a flat region mostly inside one mask is that body's face: its uncovered pixels are
