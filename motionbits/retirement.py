@@ -254,9 +254,11 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     An arm's shadow sweeping a table moves its edges, and the flow follows them; what is
     under it is the table, dimmed. A body that moves onto the table replaces its colour
     or its texture (a flat, darker grey on a flat grey table would pass for a shadow). A
-    body that stands still under a passing shadow does not move (it is not tested), and
-    one that has moved for longer has shown it is a body (it must look shadowed over more
-    of its pixels).
+    body that stands still under a passing shadow does not move (it is not tested); where
+    the flow follows the shadow's edge across it all the same, the memory holds the body's
+    own look, remembered with its id at rest, and those pixels do not count. One that has
+    moved for longer has shown it is a body (it must look shadowed over more of its
+    pixels).
 
     Args:
         labels: (H, W) int32 label map of this frame.
@@ -294,7 +296,9 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
             return labels
         lab = labels[box]
         area = label_areas(lab)
-        dark = run_counts(lab[shadow], len(area))
+        # where the memory holds a MotionBit's own look (its body, seen at rest), a shadow
+        # passing over it dims the body: the flow follows the shadow's edge across it
+        dark = run_counts(lab[shadow & (memory.label[box] != lab)], len(area))
         gone += [i for i in members if dark[i] > share[i] * area[i]]
     return drop_labels(labels, gone)
 

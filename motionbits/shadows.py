@@ -12,6 +12,8 @@ long enough for that memory to take it in, the scene as first seen
 - only where the remembered world has texture (mean gradient above ``TEXTURE`` grey
   levels per px): on a flat table a flat face of a body in the table's hue, darker, passes
   for a shadow, and nothing tells the two apart;
+- not where the memory holds the mark's own body, seen at rest (remembered with its id):
+  a body that a shadow passes over is still the body;
 - only pieces of shadow (an opening by ``OPEN`` px keeps them), so that single pixels of a
   body that happen to match do not fray its mark;
 - a mark of which at most ``BODY_SHARE`` is shadow loses those pixels, but not where
@@ -72,6 +74,8 @@ def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray,
     shadow = memory.shadowed(cur, box)
     if shadow is None:
         return None
+    # a body at rest is remembered as itself (with its id): dimmed, it is still the body
+    shadow &= (memory.label[box] != labels[box]) | (labels[box] == 0)
     if first is not None:
         shadow |= dimmed(cur, first.look, first.known, box, memory.tolerance)
     texture = cv2.blur(gradient_magnitude(memory.gray[box]), (7, 7))

@@ -119,12 +119,14 @@ def test_moving_shadow_on_texture_is_not_a_motionbit(relight_sigma, expect_marks
     assert (max(shown) > 0) == expect_marks, shown
 
 
-def _remembered(base: np.ndarray) -> StaticMemory:
-    """A static memory that saw ``base`` standing still."""
+def _remembered(base: np.ndarray, labels: np.ndarray | None = None) -> StaticMemory:
+    """A static memory that saw ``base`` standing still, with the MotionBits ``labels``
+    (none by default) at rest on it."""
     memory = StaticMemory(SIZE, tolerance=10.0, covered=20.0)
     gray = _gray(base)
     memory.observe(base, gray, np.zeros(SIZE, np.float32))
-    memory.update(base, gray, gray, np.ones(SIZE, bool), np.zeros(SIZE, np.int32))
+    memory.update(base, gray, gray, np.ones(SIZE, bool),
+                  np.zeros(SIZE, np.int32) if labels is None else labels)
     return memory
 
 
@@ -194,6 +196,27 @@ def test_young_moving_cast_shadows_are_retired_bodies_and_others_kept():
     assert SHADOW_SHARE < share < OLD_SHADOW_SHARE
     assert retire_shadows(half, cur, memory, {1}, old, 1 + SHADOW_AGE).max() == 0
     assert retire_shadows(half, cur, memory, {1}, old, 2 + SHADOW_AGE) is half
+
+
+def test_a_body_at_rest_that_a_shadow_passes_over_is_not_taken_for_a_shadow():
+    """A body at rest is remembered with its id. A shadow passing over it dims it (and the
+    flow may follow the shadow's edge across it: it reads as moving), but it is the body:
+    its MotionBit is not retired, its mark not trimmed. The same MotionBit where the memory
+    holds the table is a shadow."""
+    base = _texture(0)
+    labels = np.zeros(SIZE, np.int32)
+    labels[95:145, 75:125] = 1  # inside the shadow's disk
+    cur = np.clip(base * _shadow((100, 120), 40, 0.5, soft=2)[..., None], 0, 255)
+    cur = cur.astype(np.uint8)
+    gray = _gray(cur)
+    for rested, kept in ((None, False), (labels, True)):
+        memory = _remembered(base, rested)
+        memory.observe(cur, gray, np.abs(gray - _gray(base)))
+        retired = retire_shadows(labels, cur, memory, {1}, {1: 8}, frame_index=10)
+        trimmed = trim_shadows(labels, cast_shadows(memory, cur, labels))
+        assert (retired is labels) == kept and (trimmed is labels) == kept
+        if not kept:
+            assert retired.max() == 0 and trimmed.max() == 0
 
 
 def _marks_on_shadow_and_body() -> np.ndarray:
