@@ -75,6 +75,7 @@ def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray,
     if shadow is None:
         return None
     # a body at rest is remembered as itself (with its id): dimmed, it is still the body
+    # (pixels of no MotionBit, where completion may grow a mark, keep the test)
     shadow &= (memory.label[box] != labels[box]) | (labels[box] == 0)
     if first is not None:
         shadow |= dimmed(cur, first.look, first.known, box, memory.tolerance)
