@@ -220,10 +220,9 @@ def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndar
     Returns:
         (H, W) int32 label map (``label_map`` itself if no mark was hidden).
     """
-    had, has = label_areas(pieces), label_areas(label_map)
-    has = np.pad(has, (0, max(had.size - has.size, 0)))
-    hidden = np.flatnonzero((had > 0) & (has[:had.size] == 0))
-    hidden = hidden[hidden > 0]
+    # the labels there were and are not shown (sorted)
+    hidden = np.setdiff1d(np.flatnonzero(label_areas(pieces)[1:]) + 1,
+                          np.flatnonzero(label_areas(label_map)[1:]) + 1)
     if not hidden.size:
         return label_map
     put = np.isin(pieces, hidden) & (label_map == 0)
