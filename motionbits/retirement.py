@@ -291,14 +291,14 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
              else [(union, tested)])
     gone = []
     for box, members in parts:
-        shadow = memory.shadowed(cur, box)
+        # not where the memory holds a MotionBit's own look (its body, seen at rest): the
+        # flow may follow a passing shadow's edge across it
+        shadow = memory.shadowed(cur, box, labels)
         if shadow is None:
             return labels
         lab = labels[box]
         area = label_areas(lab)
-        # where the memory holds a MotionBit's own look (its body, seen at rest), a shadow
-        # passing over it dims the body: the flow follows the shadow's edge across it
-        dark = run_counts(lab[shadow & (memory.label[box] != lab)], len(area))
+        dark = run_counts(lab[shadow], len(area))
         gone += [i for i in members if dark[i] > share[i] * area[i]]
     return drop_labels(labels, gone)
 

@@ -238,17 +238,22 @@ class StaticMemory:
         self.known = follow_known(self.known, world)
         self.was_covered = covered > 0.5
 
-    def shadowed(self, cur: np.ndarray, box: tuple[slice, slice]) -> np.ndarray | None:
+    def shadowed(self, cur: np.ndarray, box: tuple[slice, slice],
+                 labels: np.ndarray | None = None) -> np.ndarray | None:
         """Where the image box ``box`` shows the remembered static world under a shadow:
         darker (``SHADOW_GAIN``), with the same colour (``SHADOW_CHROMA``) and the same
         texture -- the remembered grey levels times the local gain (``SHADOW_WINDOW`` mean)
-        match within ``tolerance`` (``WINDOW`` mean).
+        match within ``tolerance`` (``WINDOW`` mean) -- and, given this frame's
+        ``labels``, not where the memory holds the MotionBit a pixel is labelled with now
+        (a body remembered at rest, with its id: a shadow passing over it dims the body;
+        round 46).
 
         Call between :meth:`observe` and :meth:`update`.
 
         Args:
             cur: (H, W, 3) uint8 current RGB frame.
             box: (rows, cols) slices of the image box.
+            labels: (H, W) int label map of this frame, or None (every pixel is tested).
 
         Returns:
             (h, w) bool on the box; None when the memory does not hold (:meth:`observe`
@@ -256,7 +261,11 @@ class StaticMemory:
         """
         if self._difference is None:
             return None
-        return dimmed(cur, self.color, self.known, box, self.tolerance)
+        shadow = dimmed(cur, self.color, self.known, box, self.tolerance)
+        if labels is not None:
+            now = labels[box]
+            shadow &= (self.label[box] != now) | (now == 0)
+        return shadow
 
     def dimmed_share(self, cur: np.ndarray, labels: np.ndarray, lab: int,
                      box: tuple[slice, slice]) -> float:

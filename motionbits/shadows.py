@@ -71,12 +71,11 @@ def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray,
     box = nonzero_box(labels)
     if box[0].stop == box[0].start:
         return None
-    shadow = memory.shadowed(cur, box)
-    if shadow is None:
-        return None
     # a body at rest is remembered as itself (with its id): dimmed, it is still the body
     # (pixels of no MotionBit, where completion may grow a mark, keep the test)
-    shadow &= (memory.label[box] != labels[box]) | (labels[box] == 0)
+    shadow = memory.shadowed(cur, box, labels)
+    if shadow is None:
+        return None
     if first is not None:
         shadow |= dimmed(cur, first.look, first.known, box, memory.tolerance)
     texture = cv2.blur(gradient_magnitude(memory.gray[box]), (7, 7))
