@@ -60,7 +60,7 @@ from motionbits.boxes import (at_border, grow_box, label_areas, label_boxes, non
                               pieces_holding)
 from motionbits.masks import EDGELESS_GRADIENT, drop_labels, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
-                                 follow_known, follow_look, light_change)
+                                 follow_known, follow_look, light_change, texture_shows)
 
 __all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook",
            "COMPLETION_REACH", "WIDER", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE",
@@ -386,10 +386,12 @@ class FirstLook:
         shape: (H, W) of the working frames.
         covered: grey levels (``WINDOW`` mean, largest channel) by which a pixel must
             differ from its first look to look otherwise (config ``reveal_covered``).
+        tolerance: grey levels (``WINDOW`` mean) within which a shadow leaves the first
+            look's texture, dimmed (config ``reveal_tolerance``; :meth:`relit`).
     """
 
-    def __init__(self, shape: tuple[int, int], covered: float) -> None:
-        self.covered = covered
+    def __init__(self, shape: tuple[int, int], covered: float, tolerance: float) -> None:
+        self.covered, self.tolerance = covered, tolerance
         self.look = np.zeros((*shape, 3), np.uint8)
         self.known = np.zeros(shape, bool)
         # id -> (box, mark in it) of the marks found by :meth:`uncovered` at the last frame
@@ -428,7 +430,10 @@ class FirstLook:
         known = self.known[box].ravel()
         area = np.bincount(labels)
         seen = np.bincount(labels, weights=known)
-        changed = np.bincount(labels, weights=self.changed(rgb, box).ravel(),
+        # a shadow only where the first look's texture shows through it: a grey body
+        # on a grey table is darker than the table, but it is not the table
+        relit = self.relit(rgb, box, texture=True)
+        changed = np.bincount(labels, weights=self.changed(rgb, box, relit).ravel(),
                               minlength=area.size)
         same = ((area > 0) & (seen >= FIRST_SEEN_KNOWN * area)
                 & (changed <= FIRST_SEEN_CHANGED * seen))
@@ -486,15 +491,26 @@ class FirstLook:
         changed = self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
         return changed & ~(self.relit(rgb, box) if relit is None else relit)
 
-    def relit(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+    def relit(self, rgb: np.ndarray, box: tuple[slice, slice],
+              texture: bool = False) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
         ``rgb`` that look as first seen under a cast shadow: the same chromaticity within
         ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the brightness
-        (``SHADOW_WINDOW`` means)."""
+        (``SHADOW_WINDOW`` means). With ``texture``, only where the first look's texture
+        also shows through, dimmed by that fraction
+        (:func:`motionbits.revealed.texture_shows`): a body of the table's colour,
+        darker, is not a shadow on it. Without it the test is loose on purpose: where a
+        shadow may be, completion and the arrivals' search do not grow (a moving
+        camera's shadows fail the texture test in part, at their hard edges and where
+        the followed first look is off by a pixel)."""
         window = (SHADOW_WINDOW, SHADOW_WINDOW)
         chroma, gain, _, _ = light_change(cv2.blur(rgb[box], window),
                                           cv2.blur(self.look[box], window))
-        return (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
+        shadow = (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
+        if texture:
+            _, _, sum_now, sum_then = light_change(rgb[box], self.look[box])
+            shadow &= texture_shows(sum_now, sum_then, gain, self.tolerance)
+        return shadow
 
 
 def _iou(a: tuple[tuple[slice, slice], np.ndarray],

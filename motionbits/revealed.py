@@ -38,8 +38,8 @@ import numpy as np
 
 from motionbits.boxes import grow_box
 
-__all__ = ["StaticMemory", "light_change", "follow_known", "follow_look", "follow_ids",
-           "carry_at_rest"]
+__all__ = ["StaticMemory", "light_change", "texture_shows", "follow_known", "follow_look",
+           "follow_ids", "carry_at_rest"]
 
 #: px, side of the square over which grey-level differences are averaged.
 WINDOW = 5
@@ -142,6 +142,15 @@ def carry_at_rest(prior: np.ndarray, valid: np.ndarray, labels: np.ndarray,
     return prior, valid
 
 
+def texture_shows(sum_now: np.ndarray, sum_then: np.ndarray, gain: np.ndarray,
+                  tolerance: float) -> np.ndarray:
+    """(h, w) bool: where the brightness ``sum_now`` (sum of the three channels, (h, w)
+    float32) is the remembered ``sum_then`` times the smooth ``gain`` (h, w) within
+    ``tolerance`` grey levels (``WINDOW`` mean, per channel): the texture under a shadow is
+    the remembered one, dimmed; another surface of the same colour has its own."""
+    return cv2.blur(np.abs(sum_now - gain * sum_then), (WINDOW, WINDOW)) < 3 * tolerance
+
+
 def dimmed(cur: np.ndarray, then: np.ndarray, known: np.ndarray, box: tuple[slice, slice],
            tolerance: float) -> np.ndarray:
     """(h, w) bool on the image box ``box``: where (H, W, 3) uint8 ``cur`` shows ``then``
@@ -152,11 +161,10 @@ def dimmed(cur: np.ndarray, then: np.ndarray, known: np.ndarray, box: tuple[slic
     inner = (slice(box[0].start - y0, box[0].stop - y0),
              slice(box[1].start - x0, box[1].stop - x0))
     chroma, gain, sum_now, sum_then = light_change(cur[grown], then[grown])
-    # the texture under a shadow is the remembered one, dimmed by a smooth gain
     local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
-    relit = cv2.blur(np.abs(sum_now - local * sum_then), (WINDOW, WINDOW)) / 3
     shadow = ((sum_then > SHADOW_MIN_SUM) & (chroma < SHADOW_CHROMA)
-              & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1]) & (relit < tolerance))
+              & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
+              & texture_shows(sum_now, sum_then, local, tolerance))
     return known[box] & shadow[inner]
 
 

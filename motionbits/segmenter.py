@@ -203,7 +203,8 @@ class MotionBitsSegmenter:
                                     self.config.reveal_covered)
         self._arrivals = Arrivals((hw, ww), self.config.reveal_covered,  # arrivals.py
                                   self.config.carry_tolerance, self.config.reveal_tolerance)
-        self._first_look = FirstLook((hw, ww), self.config.reveal_covered)  # completion.py
+        self._first_look = FirstLook((hw, ww), self.config.reveal_covered,  # completion.py
+                                     self.config.reveal_tolerance)
 
     # ------------------------------------------------------------------ helpers
     @contextmanager

@@ -101,7 +101,7 @@ def _first_look_then(first: np.ndarray, now: np.ndarray, labels: np.ndarray | No
     (it stood unlabelled one frame) and no MotionBit passed there; the flow saw motion
     over the block's place (``moved``) or nowhere."""
     labels = np.zeros(now.shape[:2], np.int32) if labels is None else labels
-    first_look = FirstLook(now.shape[:2], COVERED)
+    first_look = FirstLook(now.shape[:2], COVERED, TOLERANCE)
     first_look.update(first, np.ones(labels.shape, bool), np.zeros(labels.shape, np.int32))
     memory = Arrivals(now.shape[:2], COVERED, REST, TOLERANCE)
     seen_moving = np.zeros(labels.shape, bool)

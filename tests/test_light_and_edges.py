@@ -261,7 +261,7 @@ def test_a_shadow_that_stood_still_is_told_by_the_scene_first_seen():
     memory = _remembered(shaded.astype(np.uint8))  # learnt the shadow
     gray = _gray(cur)
     memory.observe(cur, gray, np.zeros(SIZE, np.float32))
-    first = FirstLook(SIZE, covered=20.0)
+    first = FirstLook(SIZE, covered=20.0, tolerance=10.0)
     first.update(base, np.ones(SIZE, bool), np.zeros(SIZE, np.int32))
     labels = _marks_on_shadow_and_body()
     assert trim_shadows(labels, cast_shadows(memory, cur, labels)) is labels
