@@ -117,6 +117,9 @@ FIRST_SEEN_KNOWN = 0.3
 #: changed less than 10.6%; docs/reading_the_paper.md,
 #: "Marks that stand as first seen are not shown", rounds 33 and 36).
 FIRST_SEEN_CHANGED = 0.08
+#: Steps per unit of a brightness ratio in :meth:`FirstLook.relit`'s median gain (uint8
+#: levels: ratios up to 2.55; a shadow's are under ``SHADOW_GAIN[1]``).
+GAIN_LEVELS = 100
 #: A mark shows the surface around it where a body was first seen
 #: (:meth:`FirstLook.uncovered`) only where the first look knows this share of it or more.
 UNCOVERED_KNOWN = 0.5
@@ -497,8 +500,8 @@ class FirstLook:
         ``rgb`` that look as first seen under a cast shadow: the same chromaticity within
         ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the brightness
         (``SHADOW_WINDOW`` means). With ``texture``, only where the first look's texture
-        also shows through, dimmed by that fraction
-        (:func:`motionbits.revealed.texture_shows`): a body of the table's colour,
+        also shows through, dimmed by the fraction most of the window is dimmed by (the
+        median; :func:`motionbits.revealed.texture_shows`): a body of the table's colour,
         darker, is not a shadow on it. Without it the test is loose on purpose: where a
         shadow may be, completion and the arrivals' search do not grow (a moving
         camera's shadows fail the texture test in part, at their hard edges and where
@@ -508,7 +511,11 @@ class FirstLook:
                                           cv2.blur(self.look[box], window))
         shadow = (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
         if texture:
-            _, _, sum_now, sum_then = light_change(rgb[box], self.look[box])
+            _, pixel_gain, sum_now, sum_then = light_change(rgb[box], self.look[box])
+            # the gain of most of the window (its median, in steps of 1/GAIN_LEVELS): a
+            # hard shadow edge in it is no change of texture, as a window mean would read
+            levels = np.clip(pixel_gain * GAIN_LEVELS, 0, 255).astype(np.uint8)
+            gain = cv2.medianBlur(levels, SHADOW_WINDOW).astype(np.float32) / GAIN_LEVELS
             shadow &= texture_shows(sum_now, sum_then, gain, self.tolerance)
         return shadow
 
