@@ -187,7 +187,9 @@ class MotionBitsConfig:
     # -- after something covered it (it differed by more than reveal_covered) is the static
     # world uncovered again: "nothing moved" explains it, whatever flow smeared into it;
     # reveal_covered is also how far a pixel must differ from the static world seen there
-    # before to look otherwise (arrivals.py; completion.FirstLook, the scene first seen)
+    # before to look otherwise (arrivals.py; completion.FirstLook, the scene first seen),
+    # and reveal_tolerance how close a cast shadow keeps the texture it dims (the shadow
+    # tests of revealed.py and completion.FirstLook.relit)
     reveal_tolerance: float = 10.0
     reveal_covered: float = 20.0
     # ours (masks.snap_to_edges): each shown mask is trimmed back to the strongest image

@@ -145,9 +145,10 @@ def carry_at_rest(prior: np.ndarray, valid: np.ndarray, labels: np.ndarray,
 def texture_shows(sum_now: np.ndarray, sum_then: np.ndarray, gain: np.ndarray,
                   tolerance: float) -> np.ndarray:
     """(h, w) bool: where the brightness ``sum_now`` (sum of the three channels, (h, w)
-    float32) is the remembered ``sum_then`` times the smooth ``gain`` (h, w) within
-    ``tolerance`` grey levels (``WINDOW`` mean, per channel): the texture under a shadow is
-    the remembered one, dimmed; another surface of the same colour has its own."""
+    float32) is the remembered ``sum_then`` times ``gain`` (h, w; the dimming, taken over
+    a window around each pixel) within ``tolerance`` grey levels (``WINDOW`` mean, per
+    channel): the texture under a shadow is the remembered one, dimmed; another surface
+    of the same colour has its own."""
     return cv2.blur(np.abs(sum_now - gain * sum_then), (WINDOW, WINDOW)) < 3 * tolerance
 
 
