@@ -59,8 +59,9 @@ from motionbits.arrivals import SURROUND_DIFFERENCE, surroundings_colour
 from motionbits.boxes import (at_border, grow_box, label_areas, label_boxes, nonzero_box,
                               pieces_holding)
 from motionbits.masks import EDGELESS_GRADIENT, drop_labels, outline_gradient
-from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, _color_difference,
-                                 follow_known, follow_look, light_change, texture_shows)
+from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, WINDOW,
+                                 _color_difference, follow_known, follow_look, light_change,
+                                 texture_shows)
 
 __all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook",
            "COMPLETION_REACH", "WIDER", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE",
@@ -120,6 +121,9 @@ FIRST_SEEN_CHANGED = 0.08
 #: Steps per unit of a brightness ratio in :meth:`FirstLook.relit`'s median gain (uint8
 #: levels: ratios up to 2.55; a shadow's are under ``SHADOW_GAIN[1]``).
 GAIN_LEVELS = 100
+#: px: the texture test's answer at a pixel reads the pixels this far (the median's
+#: window, then the residual's mean).
+TEXTURE_REACH = SHADOW_WINDOW // 2 + WINDOW // 2
 #: A mark shows the surface around it where a body was first seen
 #: (:meth:`FirstLook.uncovered`) only where the first look knows this share of it or more.
 UNCOVERED_KNOWN = 0.5
@@ -433,11 +437,18 @@ class FirstLook:
         known = self.known[box].ravel()
         area = np.bincount(labels)
         seen = np.bincount(labels, weights=known)
-        # a shadow only where the first look's texture shows through it: a grey body
-        # on a grey table is darker than the table, but it is not the table
-        relit = self.relit(rgb, box, texture=True)
-        changed = np.bincount(labels, weights=self.changed(rgb, box, relit).ravel(),
-                              minlength=area.size)
+        differs = self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
+        relit = self.relit(rgb, box)
+        # a shadow only where the first look's texture shows through it too: a grey body
+        # on a grey table is darker than the table, but it is not the table (tested only
+        # around the marks' pixels it decides: the windowed median is the costly part)
+        doubt = differs & relit & (label_map[box] > 0)
+        if doubt.any():
+            near = grow_box(nonzero_box(doubt), TEXTURE_REACH, doubt.shape)
+            rows = slice(box[0].start + near[0].start, box[0].start + near[0].stop)
+            cols = slice(box[1].start + near[1].start, box[1].start + near[1].stop)
+            relit[near] &= self._texture_kept(rgb, (rows, cols))
+        changed = np.bincount(labels, weights=(differs & ~relit).ravel(), minlength=area.size)
         same = ((area > 0) & (seen >= FIRST_SEEN_KNOWN * area)
                 & (changed <= FIRST_SEEN_CHANGED * seen))
         same[0] = False
@@ -510,14 +521,17 @@ class FirstLook:
         chroma, gain, _, _ = light_change(cv2.blur(rgb[box], window),
                                           cv2.blur(self.look[box], window))
         shadow = (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
-        if texture:
-            _, pixel_gain, sum_now, sum_then = light_change(rgb[box], self.look[box])
-            # the gain of most of the window (its median, in steps of 1/GAIN_LEVELS): a
-            # hard shadow edge in it is no change of texture, as a window mean would read
-            levels = np.clip(pixel_gain * GAIN_LEVELS, 0, 255).astype(np.uint8)
-            gain = cv2.medianBlur(levels, SHADOW_WINDOW).astype(np.float32) / GAIN_LEVELS
-            shadow &= texture_shows(sum_now, sum_then, gain, self.tolerance)
-        return shadow
+        return shadow & self._texture_kept(rgb, box) if texture else shadow
+
+    def _texture_kept(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+        """(h, w) bool: where the first look's texture shows through ``rgb`` in the
+        image box ``box``, dimmed by the ratio of brightness of most of the
+        ``SHADOW_WINDOW`` window (its median, in steps of 1/``GAIN_LEVELS``: a hard shadow
+        edge in the window is no change of texture, as a window mean would read)."""
+        _, pixel_gain, sum_now, sum_then = light_change(rgb[box], self.look[box])
+        levels = np.clip(pixel_gain * GAIN_LEVELS, 0, 255).astype(np.uint8)
+        gain = cv2.medianBlur(levels, SHADOW_WINDOW).astype(np.float32) / GAIN_LEVELS
+        return texture_shows(sum_now, sum_then, gain, self.tolerance)
 
 
 def _iou(a: tuple[tuple[slice, slice], np.ndarray],
