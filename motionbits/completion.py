@@ -118,8 +118,9 @@ FIRST_SEEN_KNOWN = 0.3
 #: changed less than 10.6%; docs/reading_the_paper.md,
 #: "Marks that stand as first seen are not shown", rounds 33 and 36).
 FIRST_SEEN_CHANGED = 0.08
-#: Steps per unit of a brightness ratio in :meth:`FirstLook.relit`'s median gain (uint8
-#: levels: ratios up to 2.55; a shadow's are under ``SHADOW_GAIN[1]``).
+#: Steps per unit of a brightness ratio in the median gain of
+#: :meth:`FirstLook.texture_kept` (uint8 levels: ratios up to 2.55; a shadow's are under
+#: ``SHADOW_GAIN[1]``).
 GAIN_LEVELS = 100
 #: px: the texture test's answer at a pixel reads the pixels this far (the median's
 #: window, then the residual's mean).
@@ -437,7 +438,7 @@ class FirstLook:
         known = self.known[box].ravel()
         area = np.bincount(labels)
         seen = np.bincount(labels, weights=known)
-        differs = self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
+        differs = self._differs(rgb, box)
         relit = self.relit(rgb, box)
         # a shadow only where the first look's texture shows through it too: a grey body
         # on a grey table is darker than the table, but it is not the table (tested only
@@ -447,7 +448,7 @@ class FirstLook:
             near = grow_box(nonzero_box(doubt), TEXTURE_REACH, doubt.shape)
             rows = slice(box[0].start + near[0].start, box[0].start + near[0].stop)
             cols = slice(box[1].start + near[1].start, box[1].start + near[1].stop)
-            relit[near] &= self._texture_kept(rgb, (rows, cols))
+            relit[near] &= self.texture_kept(rgb, (rows, cols))
         changed = np.bincount(labels, weights=(differs & ~relit).ravel(), minlength=area.size)
         same = ((area > 0) & (seen >= FIRST_SEEN_KNOWN * area)
                 & (changed <= FIRST_SEEN_CHANGED * seen))
@@ -502,32 +503,33 @@ class FirstLook:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
         ``rgb`` that look otherwise than first seen, other than by a cast shadow
         (:meth:`relit`; or ``relit``, (h, w) bool, where the caller has it already)."""
-        changed = self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
-        return changed & ~(self.relit(rgb, box) if relit is None else relit)
+        return self._differs(rgb, box) & ~(self.relit(rgb, box) if relit is None else relit)
 
-    def relit(self, rgb: np.ndarray, box: tuple[slice, slice],
-              texture: bool = False) -> np.ndarray:
+    def _differs(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+        """(h, w) bool: known pixels of the box that differ from their first look by more
+        than ``covered`` (``WINDOW`` mean, largest channel), shadow or not."""
+        return self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
+
+    def relit(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
         ``rgb`` that look as first seen under a cast shadow: the same chromaticity within
         ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the brightness
-        (``SHADOW_WINDOW`` means). With ``texture``, only where the first look's texture
-        also shows through, dimmed by the fraction most of the window is dimmed by (the
-        median; :func:`motionbits.revealed.texture_shows`): a body of the table's colour,
-        darker, is not a shadow on it. Without it the test is loose on purpose: where a
-        shadow may be, completion and the arrivals' search do not grow (a moving
-        camera's shadows fail the texture test in part, at their hard edges and where
-        the followed first look is off by a pixel)."""
+        (``SHADOW_WINDOW`` means). Loose on purpose: a body of the table's colour, darker,
+        passes it too (:meth:`texture_kept` tells them apart, for :meth:`as_first_seen`);
+        where a shadow may be, completion and the arrivals' search do not grow (a moving
+        camera's shadows fail the texture test in part, at their hard edges and where the
+        followed first look is off by a pixel)."""
         window = (SHADOW_WINDOW, SHADOW_WINDOW)
         chroma, gain, _, _ = light_change(cv2.blur(rgb[box], window),
                                           cv2.blur(self.look[box], window))
-        shadow = (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
-        return shadow & self._texture_kept(rgb, box) if texture else shadow
+        return (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
 
-    def _texture_kept(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
-        """(h, w) bool: where the first look's texture shows through ``rgb`` in the
-        image box ``box``, dimmed by the ratio of brightness of most of the
-        ``SHADOW_WINDOW`` window (its median, in steps of 1/``GAIN_LEVELS``: a hard shadow
-        edge in the window is no change of texture, as a window mean would read)."""
+    def texture_kept(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+        """(h, w) bool: where the first look's texture shows through the (H, W, 3) uint8
+        frame ``rgb`` in the image box ``box``, dimmed by the ratio of brightness of most
+        of the ``SHADOW_WINDOW`` window (its median, in steps of 1/``GAIN_LEVELS``: a hard
+        shadow edge in the window is no change of texture, as a window mean would read;
+        :func:`motionbits.revealed.texture_shows`)."""
         _, pixel_gain, sum_now, sum_then = light_change(rgb[box], self.look[box])
         levels = np.clip(pixel_gain * GAIN_LEVELS, 0, 255).astype(np.uint8)
         gain = cv2.medianBlur(levels, SHADOW_WINDOW).astype(np.float32) / GAIN_LEVELS
