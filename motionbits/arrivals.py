@@ -260,8 +260,9 @@ class Arrivals:
             x, y, w, h = stats[1:][large, :4].T
             box = grow_box((slice(y.min(), (y + h).max()), slice(x.min(), (x + w).max())),
                            SHADOW_WINDOW + side, labels.shape)
-            unlike[box] &= ~first_look.relit(cur, box) & ~dimmed(
-                cur, first_look.look, first_look.known, box, self.tolerance)
+            unlike[box] &= ~first_look.relit(cur, box, unlike[box])
+            unlike[box] &= ~dimmed(cur, first_look.look, first_look.known, box, self.tolerance,
+                                   unlike[box])
             opened = cv2.morphologyEx(unlike.view(np.uint8), cv2.MORPH_OPEN, square)
             n, comp, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
         self._unlike_first = opened > 0

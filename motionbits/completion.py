@@ -308,7 +308,7 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     trimap[f:-f, f:-f] = cv2.GC_PR_BGD
     relit = None  # the scene first seen there, under a cast shadow now
     if first_look is not None:  # (another mark's pixels are not this body's)
-        relit = first_look.known[rows, cols] & first_look.relit(rgb, (rows, cols))
+        relit = first_look.relit(rgb, (rows, cols), first_look.known[rows, cols])
         trimap[first_look.changed(rgb, (rows, cols), relit) & (trimap == cv2.GC_PR_BGD)
                & free] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
@@ -435,24 +435,25 @@ class FirstLook:
         labels = label_map[box].ravel()
         if not labels.size:
             return np.zeros(0, np.int64)
-        known = self.known[box].ravel()
         area = np.bincount(labels)
-        seen = np.bincount(labels, weights=known)
+        seen = np.bincount(labels[self.known[box].ravel()], minlength=area.size)
+        candidate = (area > 0) & (seen >= FIRST_SEEN_KNOWN * area)
+        candidate[0] = False
+        if not candidate.any():
+            return np.zeros(0, np.int64)
         differs = self._differs(rgb, box)
-        relit = self.relit(rgb, box)
         # a shadow only where the first look's texture shows through it too: a grey body
-        # on a grey table is darker than the table, but it is not the table (tested only
-        # around the marks' pixels it decides: the windowed median is the costly part)
-        doubt = differs & relit & (label_map[box] > 0)
-        if doubt.any():
-            near = grow_box(nonzero_box(doubt), TEXTURE_REACH, doubt.shape)
+        # on a grey table is darker than the table, but it is not the table (both tested
+        # only at the pixels they decide, of the marks the first look knows well enough:
+        # the windowed median is the costly part)
+        relit = self.relit(rgb, box, differs & candidate[label_map[box]])
+        if relit.any():
+            near = grow_box(nonzero_box(relit), TEXTURE_REACH, relit.shape)
             rows = slice(box[0].start + near[0].start, box[0].start + near[0].stop)
             cols = slice(box[1].start + near[1].start, box[1].start + near[1].stop)
             relit[near] &= self.texture_kept(rgb, (rows, cols))
-        changed = np.bincount(labels, weights=(differs & ~relit).ravel(), minlength=area.size)
-        same = ((area > 0) & (seen >= FIRST_SEEN_KNOWN * area)
-                & (changed <= FIRST_SEEN_CHANGED * seen))
-        same[0] = False
+        changed = np.bincount(labels[(differs & ~relit).ravel()], minlength=area.size)
+        same = candidate & (changed <= FIRST_SEEN_CHANGED * seen)
         return np.flatnonzero(same)
 
     def uncovered(self, label_map: np.ndarray, rgb: np.ndarray,
@@ -503,26 +504,33 @@ class FirstLook:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
         ``rgb`` that look otherwise than first seen, other than by a cast shadow
         (:meth:`relit`; or ``relit``, (h, w) bool, where the caller has it already)."""
-        return self._differs(rgb, box) & ~(self.relit(rgb, box) if relit is None else relit)
+        differs = self._differs(rgb, box)
+        return differs & ~(self.relit(rgb, box, differs) if relit is None else relit)
 
     def _differs(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: known pixels of the box that differ from their first look by more
         than ``covered`` (``WINDOW`` mean, largest channel), shadow or not."""
         return self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
 
-    def relit(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+    def relit(self, rgb: np.ndarray, box: tuple[slice, slice],
+              where: np.ndarray | None = None) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
         ``rgb`` that look as first seen under a cast shadow: the same chromaticity within
         ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the brightness
-        (``SHADOW_WINDOW`` means). Loose on purpose: a body of the table's colour, darker,
+        (``SHADOW_WINDOW`` means); only among the pixels ``where`` ((h, w) bool; None:
+        all) when given. Loose on purpose: a body of the table's colour, darker,
         passes it too (:meth:`texture_kept` tells them apart, for :meth:`as_first_seen`);
         where a shadow may be, completion and the arrivals' search do not grow (a moving
         camera's shadows fail the texture test in part, at their hard edges and where the
         followed first look is off by a pixel)."""
         window = (SHADOW_WINDOW, SHADOW_WINDOW)
-        chroma, gain, _, _ = light_change(cv2.blur(rgb[box], window),
-                                          cv2.blur(self.look[box], window))
-        return (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
+        now, then = cv2.blur(rgb[box], window), cv2.blur(self.look[box], window)
+        if where is None:
+            where = np.ones(now.shape[:2], bool)
+        relit = where.copy()
+        chroma, gain, _, _ = light_change(now[where], then[where])
+        relit[where] = (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
+        return relit
 
     def texture_kept(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: where the first look's texture shows through the (H, W, 3) uint8

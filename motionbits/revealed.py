@@ -38,8 +38,9 @@ import numpy as np
 
 from motionbits.boxes import grow_box
 
-__all__ = ["StaticMemory", "light_change", "texture_shows", "follow_known", "follow_look",
-           "follow_ids", "carry_at_rest"]
+__all__ = ["StaticMemory", "light_change", "brightness", "gain_of", "chroma_change",
+           "dimmed", "texture_shows", "follow_known", "follow_look", "follow_ids",
+           "carry_at_rest"]
 
 #: px, side of the square over which grey-level differences are averaged.
 WINDOW = 5
@@ -65,6 +66,13 @@ def _color_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return cv2.max(cv2.max(r, g), b_)
 
 
+def brightness(image: np.ndarray) -> np.ndarray:
+    """(...) float32 sum of the three channels of an (..., 3) uint8 (or float32) image
+    (channel by channel: numpy's sums along a last axis of 3 are ~10x slower)."""
+    return (image[..., 0].astype(np.float32) + image[..., 1].astype(np.float32)
+            + image[..., 2].astype(np.float32))
+
+
 def light_change(now: np.ndarray, then: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """How the colours ``then`` look as ``now`` -- each (..., 3) uint8 (or float32) --
@@ -72,15 +80,28 @@ def light_change(now: np.ndarray, then: np.ndarray
     (...) float32, with ``chroma`` the largest change of chromaticity (each channel over
     the sum of the three, +1) and ``gain`` the ratio of brightness (the sums, +8 each, so
     that dark pixels do not explode)."""
-    # channel by channel: numpy's sums and maxima along a last axis of 3 are ~10x slower
-    a = [now[..., c].astype(np.float32) for c in range(3)]
-    b = [then[..., c].astype(np.float32) for c in range(3)]
-    sum_now, sum_then = a[0] + a[1] + a[2], b[0] + b[1] + b[2]
+    sum_now, sum_then = brightness(now), brightness(then)
+    return chroma_change(now, then, sum_now, sum_then), gain_of(sum_now, sum_then), \
+        sum_now, sum_then
+
+
+def gain_of(sum_now: np.ndarray, sum_then: np.ndarray) -> np.ndarray:
+    """(...) float32 ratio of brightness of :func:`light_change` from the two
+    :func:`brightness` sums."""
+    return (sum_now + 8) / (sum_then + 8)
+
+
+def chroma_change(now: np.ndarray, then: np.ndarray, sum_now: np.ndarray,
+                  sum_then: np.ndarray) -> np.ndarray:
+    """(...) float32 largest change of chromaticity of :func:`light_change`, given the
+    (..., 3) colours and their :func:`brightness` sums."""
     scale_now, scale_then = sum_now + 1, sum_then + 1
-    chroma = np.abs(a[0] / scale_now - b[0] / scale_then)
-    for c in (1, 2):
-        np.maximum(chroma, np.abs(a[c] / scale_now - b[c] / scale_then), out=chroma)
-    return chroma, (sum_now + 8) / (sum_then + 8), sum_now, sum_then
+    chroma = None
+    for c in range(3):
+        change = np.abs(now[..., c].astype(np.float32) / scale_now
+                        - then[..., c].astype(np.float32) / scale_then)
+        chroma = change if chroma is None else np.maximum(chroma, change, out=chroma)
+    return chroma
 
 
 def follow_known(known: np.ndarray, world: np.ndarray) -> np.ndarray:
@@ -153,20 +174,28 @@ def texture_shows(sum_now: np.ndarray, sum_then: np.ndarray, gain: np.ndarray,
 
 
 def dimmed(cur: np.ndarray, then: np.ndarray, known: np.ndarray, box: tuple[slice, slice],
-           tolerance: float) -> np.ndarray:
+           tolerance: float, where: np.ndarray | None = None) -> np.ndarray:
     """(h, w) bool on the image box ``box``: where (H, W, 3) uint8 ``cur`` shows ``then``
-    (known where ``known``) under a shadow (:meth:`StaticMemory.shadowed`)."""
+    (known where ``known``) under a shadow (:meth:`StaticMemory.shadowed`); only among the
+    pixels ``where`` ((h, w) bool; None: all) when given."""
     # grown by the windows' reach, so that the answer is the whole image's, cropped
     grown = grow_box(box, SHADOW_WINDOW // 2 + WINDOW // 2, known.shape)
     y0, x0 = grown[0].start, grown[1].start
     inner = (slice(box[0].start - y0, box[0].stop - y0),
              slice(box[1].start - x0, box[1].stop - x0))
-    chroma, gain, sum_now, sum_then = light_change(cur[grown], then[grown])
+    now, then = cur[grown], then[grown]
+    sum_now, sum_then = brightness(now), brightness(then)
+    gain = gain_of(sum_now, sum_then)
     local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
-    shadow = ((sum_then > SHADOW_MIN_SUM) & (chroma < SHADOW_CHROMA)
-              & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
-              & texture_shows(sum_now, sum_then, local, tolerance))
-    return known[box] & shadow[inner]
+    shadow = (known[box] & (sum_then[inner] > SHADOW_MIN_SUM) & (gain[inner] > SHADOW_GAIN[0])
+              & (gain[inner] < SHADOW_GAIN[1])
+              & texture_shows(sum_now, sum_then, local, tolerance)[inner])
+    if where is not None:
+        shadow &= where
+    # the colour last, only where the rest holds (most pixels of a box are lit as before)
+    now, then = now[inner][shadow], then[inner][shadow]
+    shadow[shadow] = chroma_change(now, then, brightness(now), brightness(then)) < SHADOW_CHROMA
+    return shadow
 
 
 class StaticMemory:

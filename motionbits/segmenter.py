@@ -6,6 +6,7 @@ Each step lives in its own module; this one holds the stream's state and calls t
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from functools import cache
 from typing import Iterator
@@ -156,6 +157,9 @@ class MotionBitsSegmenter:
 
             self.refiner = Sam2Refiner.from_config(self.config)
         self._threads = ThreadpoolController()  # after make_ops, the refiner: sees torch's OpenMP too
+        # one second thread, for work that OpenCV or numpy does without the GIL beside the
+        # main one's (its thread starts on first use and ends with the segmenter)
+        self._helper = ThreadPoolExecutor(max_workers=1, thread_name_prefix="motionbits")
         self.reset()
 
     def reset(self) -> None:
@@ -297,11 +301,11 @@ class MotionBitsSegmenter:
             flow_back = check_flow(self.flow(cur, self._prev), cur.shape[:2], self.flow)
 
         with self._stage("carry"):
-            # pixels whose backward target leaves the image come back inf or nan (remap
-            # interpolates the inf border): treat both as "no reliable flow" (fmin: the cap)
             back_maps = sample_maps(flow_back)  # where each pixel came from, (h, w) x and y
-            fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd, back_maps),
-                             np.float32(FB_ERROR_CAP))
+            # the flow's reliability and the static world's (the camera's) motion, on the
+            # second thread while this one carries the last frame's state
+            grid_motion = self._helper.submit(self._world_motion, flow_fwd, flow_back,
+                                              back_maps, cur)
             # last frame's labels and label history, carried to this frame
             cur_g, prev_g = _gray(cur), self._prev_gray
             raw_prev_g = prev_g
@@ -309,6 +313,10 @@ class MotionBitsSegmenter:
                 self._first = Origin(raw_prev_g, np.eye(3), np.eye(3))
             pulled = pull_back(prev_g, flow_back, back_maps)
             gradient = gradient_magnitude(cur_g)
+            (prior, earned, still_seen, joined), history = self._temporal.carry(
+                [self._labels, self._earned, self._still, self._joined], flow_back, back_maps)
+            earned = earned > 0
+            fb_err, seen_pts, reliability, camera = grid_motion.result()
             # a carried label holds a pixel only where the flow is consistent both ways and
             # its correspondence explains the pixel's appearance: uncovered background
             # does not inherit the label of the body that uncovered it
@@ -321,25 +329,14 @@ class MotionBitsSegmenter:
                 self._new_shot()
                 self._prev, self._prev_gray = cur, cur_g
                 return self._empty_result()
-            (prior, earned, still_seen, joined), history = self._temporal.carry(
-                [self._labels, self._earned, self._still, self._joined], flow_back, back_maps)
-            earned = earned > 0
 
         with self._stage("twists"):
             pts = grid.points
             ix = np.clip(np.round(pts).astype(np.int64), 0, [grid.width - 1, grid.height - 1])
             hist_nodes = history[ix[:, 1], ix[:, 0]]
-            seen_pts = pts + sample_bilinear(flow_back, pts)  # where the nodes came from
-            node_err = sample_bilinear(fb_err[..., None], pts)[:, 0]
-            reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
             # motion is measured against the dominant (camera) motion (flow_m, prev_m);
             # label maps are still carried with the true flow (but those at rest)
-            flow_m, prev_m, back_pts, cam, world, epipole = compensate_camera(
-                pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
-                threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
-                parallax=cfg.camera_parallax, grid_shape=(grid.rows, grid.cols),
-                reflow=self.flow if cfg.camera_reflow else None, cur=cur,
-                view_moving=self._camera_moved)
+            flow_m, prev_m, back_pts, cam, world, epipole = camera
             self._camera_moved = cam is not None
             if prev_m is not self._prev:  # the camera-stabilised frame ("nothing moved");
                 prev_g = _gray(prev_m)  # pulling it back along flow_m gives ``pulled`` again
@@ -507,20 +504,15 @@ class MotionBitsSegmenter:
             rep = {i: r if r in shown and i not in static else 0 for i, r in rep.items()}
 
         with self._stage("bookkeeping"):
-            self._temporal.fold(raw, labels, margin=int(np.ceil(max(grid.cell))))
             self._labels = labels
             self._resting = set(present.tolist()) - moving
-            standing = standing_still(speed, reliable, cfg.move_threshold)
-            self._still = seen_still(still_seen, standing, self.frame_index)
-            # before the memory moves on
-            shadows = cast_shadows(self._memory, cur, labels, self._first_look)
-            calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
-            if calm is not None:
-                self._arrivals.update(cur, calm, labels, reliable & ~standing)
-                self._first_look.update(cur, calm, labels)
             self._earned = (earned & (labels > 0)).astype(np.int32)
             self._setdown.record(raw_prev_g, ids, thetas, trans, cam)
             self._prev, self._prev_gray = cur, cur_g
+            # the stream's memories brought up to date on the second thread, while this one
+            # makes the masks shown up to their completion (the first step that reads them)
+            remembered = self._helper.submit(self._remember, cur, cur_g, prev_g, labels, raw,
+                                             speed, reliable, still_seen)
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low) -- those a shown MotionBit reports
             source = twist_sources(node_ids, ids, rep)
@@ -551,6 +543,7 @@ class MotionBitsSegmenter:
             # only where its outline stops inside its body) -- the small ones last, where
             # the others left room, and only those that then cover MIN_SHOWN_CELLS
             moving_marks = {rep[i] for i in moving if rep.get(i)}  # shown labels moving now
+            shadows, calm = remembered.result()
             first_look = self._first_look if calm is not None else None
             shown = complete_masks(hide_small(pieces, min_shown), cur, moving_marks, gradient,
                                    self._cuts, first_look)
@@ -583,6 +576,49 @@ class MotionBitsSegmenter:
                                   self._spans, grid, self._input_size)
         result.timings = dict(self._timings)
         return result
+
+    def _remember(self, cur: np.ndarray, cur_g: np.ndarray, prev_g: np.ndarray,
+                  labels: np.ndarray, raw: np.ndarray, speed: np.ndarray, reliable: np.ndarray,
+                  still_seen: np.ndarray
+                  ) -> tuple[tuple[tuple[slice, slice], np.ndarray] | None, np.ndarray | None]:
+        """Bring the stream's memories up to this frame: the label history folded, where
+        each pixel was last seen still, the static world's look (and the arrivals' and the
+        first look's). Returns the cast shadows the memory saw before it moved on
+        (:func:`motionbits.shadows.cast_shadows`) and the pixels it took in (None: the
+        memory is off). Writes only those memories."""
+        cfg = self.config
+        self._temporal.fold(raw, labels, margin=int(np.ceil(max(self._grid.cell))))
+        standing = standing_still(speed, reliable, cfg.move_threshold)
+        self._still = seen_still(still_seen, standing, self.frame_index)
+        # before the memory moves on
+        shadows = cast_shadows(self._memory, cur, labels, self._first_look)
+        calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
+        if calm is not None:
+            self._arrivals.update(cur, calm, labels, reliable & ~standing)
+            self._first_look.update(cur, calm, labels)
+        return shadows, calm
+
+    def _world_motion(self, flow_fwd: np.ndarray, flow_back: np.ndarray,
+                      back_maps: tuple[np.ndarray, np.ndarray], cur: np.ndarray):
+        """The flow's forward-backward error ((h, w) float32, capped), where the grid's
+        nodes came from ((n, 2)), their reliability ((n,)) and the camera's motion
+        (:func:`motionbits.camera.compensate_camera`'s tuple). Reads the stream's state,
+        writes none of it."""
+        cfg, pts = self.config, self._grid.points
+        # pixels whose backward target leaves the image come back inf or nan (remap
+        # interpolates the inf border): treat both as "no reliable flow" (fmin: the cap)
+        fb_err = np.fmin(forward_backward_error(flow_back, flow_fwd, back_maps),
+                         np.float32(FB_ERROR_CAP))
+        seen_pts = pts + sample_bilinear(flow_back, pts)  # where the nodes came from
+        node_err = sample_bilinear(fb_err[..., None], pts)[:, 0]
+        reliability = np.exp(-((node_err / cfg.fb_sigma) ** 2))
+        camera = compensate_camera(
+            pts, seen_pts, reliability, flow_back, self._prev, support=cfg.camera_support,
+            threshold=cfg.camera_threshold, min_shift=cfg.camera_min_shift,
+            parallax=cfg.camera_parallax, grid_shape=(self._grid.rows, self._grid.cols),
+            reflow=self.flow if cfg.camera_reflow else None, cur=cur,
+            view_moving=self._camera_moved)
+        return fb_err, seen_pts, reliability, camera
 
     @property
     def _dtype(self) -> type:

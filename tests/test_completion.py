@@ -6,6 +6,7 @@ import numpy as np
 from motionbits import completion
 from motionbits.completion import FirstLook, complete_masks, complete_small_marks
 from motionbits.evidence import gradient_magnitude
+from motionbits.revealed import dimmed
 
 
 def _table(seed: int = 0) -> np.ndarray:
@@ -485,3 +486,23 @@ def test_a_grey_body_set_down_on_a_grey_table_is_not_the_table_in_shadow():
             & first.texture_kept(shadow, everywhere))[mark].mean() > 0.9
     assert first.as_first_seen(labels, ball).size == 0
     assert first.as_first_seen(labels, shadow).tolist() == [5]
+
+
+def test_the_shadow_tests_restricted_to_some_pixels_answer_there_as_on_the_whole_box():
+    """``FirstLook.relit`` and ``revealed.dimmed`` compute their per-pixel colour tests only
+    where asked (``where``): there, the answer is the unrestricted one, bit for bit;
+    elsewhere, False."""
+    rng = np.random.default_rng(5)
+    look = cv2.resize(rng.integers(60, 220, (60, 80, 3), np.uint8), (320, 240))
+    now = look.copy()
+    now[60:160, 80:200] = (now[60:160, 80:200] * 0.6).astype(np.uint8)  # a shadow
+    now[100:140, 220:300] = (90, 140, 60)  # a body
+    first = _first_look(look, np.s_[0:0, 0:0])
+    box = (slice(40, 200), slice(50, 310))
+    where = rng.uniform(size=(160, 260)) < 0.3
+    whole = first.relit(now, box)
+    assert whole[20:120, 30:150].mean() > 0.9  # the shadow is found: the test tests something
+    np.testing.assert_array_equal(first.relit(now, box, where), whole & where)
+    dim = dimmed(now, look, first.known, box, 10.0)
+    assert dim[20:120, 30:150].mean() > 0.9
+    np.testing.assert_array_equal(dimmed(now, look, first.known, box, 10.0, where), dim & where)

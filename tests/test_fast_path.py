@@ -34,3 +34,27 @@ def test_exact_path_is_deterministic():
     b = [r.labels for r in segment_video(clip.frames, config)]
     for x, y in zip(a, b):
         np.testing.assert_array_equal(x, y)
+
+
+def test_segmenters_on_two_threads_give_what_each_gives_alone():
+    """Each segmenter has its own second thread (memories, camera motion, twist
+    refinement); two streams segmented at once, on two threads (a demo serving two
+    users), give the label maps and twists each gives alone."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from motionbits.synth import demo_clip
+
+    config = MotionBitsConfig(n_nodes=2500, max_side=320)
+    clips = [demo_clip(n_frames=6, size=(240, 320), seed=s).frames for s in (0, 1)]
+
+    def run(frames):
+        return [(r.labels, [b.twist for b in r.motionbits]) for r in segment_video(frames, config)]
+
+    alone = [run(c) for c in clips]
+    with ThreadPoolExecutor(2) as pool:
+        together = list(pool.map(run, clips))
+    assert any(labels.any() for labels, _ in alone[0])
+    for a, b in zip(alone, together):
+        for (la, ta), (lb, tb) in zip(a, b):
+            np.testing.assert_array_equal(la, lb)
+            np.testing.assert_array_equal(np.array(ta), np.array(tb))
