@@ -6,7 +6,6 @@ Each step lives in its own module; this one holds the stream's state and calls t
 from __future__ import annotations
 
 import time
-from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from functools import cache
 from typing import Iterator
@@ -52,6 +51,7 @@ from motionbits.records import (
 from motionbits.resting import RestingMarks
 from motionbits.retirement import APART_CELLS, Origin, moved_once, retire, retire_shadows
 from motionbits.revealed import StaticMemory, carry_at_rest
+from motionbits.second_thread import second_thread
 from motionbits.setdown import SetDown
 from motionbits.shadows import cast_shadows, trim_shadows
 from motionbits.temporal import TemporalState
@@ -157,9 +157,7 @@ class MotionBitsSegmenter:
 
             self.refiner = Sam2Refiner.from_config(self.config)
         self._threads = ThreadpoolController()  # after make_ops, the refiner: sees torch's OpenMP too
-        # one second thread, for work that OpenCV or numpy does without the GIL beside the
-        # main one's (its thread starts on first use and ends with the segmenter)
-        self._helper = ThreadPoolExecutor(max_workers=1, thread_name_prefix="motionbits")
+        self._helper = second_thread()  # work beside the main thread's (second_thread.py)
         self.reset()
 
     def reset(self) -> None:

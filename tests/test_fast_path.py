@@ -37,10 +37,13 @@ def test_exact_path_is_deterministic():
 
 
 def test_segmenters_on_two_threads_give_what_each_gives_alone():
-    """Each segmenter has its own second thread (memories, camera motion, twist
-    refinement); two streams segmented at once, on two threads (a demo serving two
-    users), give the label maps and twists each gives alone."""
+    """Each segmenter has its own second thread (memories, camera motion); two streams
+    segmented at once, on two threads (a demo serving two users), give the label maps and
+    twists each gives alone -- and so does each with its second thread's work run inline
+    (where OpenCV may use one thread only, as in ``motionbits batch``'s workers)."""
     from concurrent.futures import ThreadPoolExecutor
+
+    import cv2
 
     from motionbits.synth import demo_clip
 
@@ -53,8 +56,15 @@ def test_segmenters_on_two_threads_give_what_each_gives_alone():
     alone = [run(c) for c in clips]
     with ThreadPoolExecutor(2) as pool:
         together = list(pool.map(run, clips))
+    threads = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        inline = [run(c) for c in clips]
+    finally:
+        cv2.setNumThreads(threads)
     assert any(labels.any() for labels, _ in alone[0])
-    for a, b in zip(alone, together):
-        for (la, ta), (lb, tb) in zip(a, b):
-            np.testing.assert_array_equal(la, lb)
-            np.testing.assert_array_equal(np.array(ta), np.array(tb))
+    for a, *others in zip(alone, together, inline):
+        for b in others:
+            for (la, ta), (lb, tb) in zip(a, b):
+                np.testing.assert_array_equal(la, lb)
+                np.testing.assert_array_equal(np.array(ta), np.array(tb))
