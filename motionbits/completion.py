@@ -512,24 +512,23 @@ class FirstLook:
         than ``covered`` (``WINDOW`` mean, largest channel), shadow or not."""
         return self.known[box] & (_color_difference(rgb[box], self.look[box]) > self.covered)
 
-    def relit(self, rgb: np.ndarray, box: tuple[slice, slice],
-              where: np.ndarray | None = None) -> np.ndarray:
+    def relit(self, rgb: np.ndarray, box: tuple[slice, slice], where: np.ndarray
+              ) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
-        ``rgb`` that look as first seen under a cast shadow: the same chromaticity within
-        ``SHADOW_CHROMA`` at a fraction ``SHADOW_GAIN`` of the brightness
-        (``SHADOW_WINDOW`` means); only among the pixels ``where`` ((h, w) bool; None:
-        all) when given. Loose on purpose: a body of the table's colour, darker,
-        passes it too (:meth:`texture_kept` tells them apart, for :meth:`as_first_seen`);
-        where a shadow may be, completion and the arrivals' search do not grow (a moving
-        camera's shadows fail the texture test in part, at their hard edges and where the
-        followed first look is off by a pixel)."""
+        ``rgb``, among those ``where`` ((h, w) bool; the others are False), that look as
+        first seen under a cast shadow: the same chromaticity within ``SHADOW_CHROMA`` at
+        a fraction ``SHADOW_GAIN`` of the brightness (``SHADOW_WINDOW`` means). Loose on
+        purpose: a body of the table's colour, darker, passes it too
+        (:meth:`texture_kept` tells them apart, for :meth:`as_first_seen`); where a
+        shadow may be, completion and the arrivals' search do not grow (a moving camera's
+        shadows fail the texture test in part, at their hard edges and where the followed
+        first look is off by a pixel)."""
         window = (SHADOW_WINDOW, SHADOW_WINDOW)
-        now, then = cv2.blur(rgb[box], window), cv2.blur(self.look[box], window)
-        if where is None:
-            where = np.ones(now.shape[:2], bool)
+        chroma, gain, _, _ = light_change(cv2.blur(rgb[box], window)[where],
+                                          cv2.blur(self.look[box], window)[where])
         relit = where.copy()
-        chroma, gain, _, _ = light_change(now[where], then[where])
-        relit[where] = (chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0]) & (gain < SHADOW_GAIN[1])
+        relit[where] = ((chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0])
+                        & (gain < SHADOW_GAIN[1]))
         return relit
 
     def texture_kept(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:

@@ -96,8 +96,11 @@ MIN_SHOWN_CELLS = 8
 
 #: Stage names of the per-frame timing report, in pipeline order. "flow" is the flow
 #: backend alone (both directions, validated); "carry" is the work on the two flows before
-#: the twists: forward-backward error, grey frames, the previous frame pulled back, image
-#: gradients, where a carried label still holds, and the labels and their history carried.
+#: the twists: grey frames, the previous frame pulled back, image gradients, the labels and
+#: their history carried, and where a carried label still holds -- and, on the second
+#: thread meanwhile (:mod:`motionbits.second_thread`), the forward-backward error and the
+#: camera's motion, waited for. "bookkeeping" makes the masks shown while the second
+#: thread brings the memories up to date.
 STAGES = ("resize", "flow", "carry", "twists", "graph", "propagation", "clustering", "masks",
           "merging", "bookkeeping")
 
