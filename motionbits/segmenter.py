@@ -317,14 +317,17 @@ class MotionBitsSegmenter:
             (prior, earned, still_seen, joined), history = self._temporal.carry(
                 [self._labels, self._earned, self._still, self._joined], flow_back, back_maps)
             earned = earned > 0
-            fb_err, seen_pts, reliability, camera = grid_motion.result()
             # a carried label holds a pixel only where the flow is consistent both ways and
             # its correspondence explains the pixel's appearance: uncovered background
             # does not inherit the label of the body that uncovered it
+            explained = appearance_consistent(cur_g, pulled, gradient,
+                                              tolerance=cfg.carry_tolerance,
+                                              gradient_gain=cfg.carry_gradient)
+            # the flat regions' gradient for the masks shown, while the camera's motion comes
+            half_gradient = half_colour_gradient(cur)
+            fb_err, seen_pts, reliability, camera = grid_motion.result()
             reliable = fb_err < cfg.fb_sigma
-            prior_valid = reliable & appearance_consistent(
-                cur_g, pulled, gradient, tolerance=cfg.carry_tolerance,
-                gradient_gain=cfg.carry_gradient)
+            prior_valid = reliable & explained
             # another scene: a cut, a new shot
             if np.count_nonzero(prior_valid) / prior_valid.size < cfg.cut_share:
                 self._new_shot()
@@ -522,7 +525,6 @@ class MotionBitsSegmenter:
             # the masks shown (one per group) take the flat links that move along
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
-            half_gradient = half_colour_gradient(cur)  # flat regions (links, halos)
             with_links = join_flat_regions(
                 labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
                 move_threshold=cfg.move_threshold, min_area=speck_area,
