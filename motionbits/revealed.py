@@ -183,8 +183,8 @@ def dimmed(cur: np.ndarray, then: np.ndarray, known: np.ndarray, box: tuple[slic
     y0, x0 = grown[0].start, grown[1].start
     inner = (slice(box[0].start - y0, box[0].stop - y0),
              slice(box[1].start - x0, box[1].stop - x0))
-    now, then = cur[grown], then[grown]
-    sum_now, sum_then = brightness(now), brightness(then)
+    now, past = cur[grown], then[grown]
+    sum_now, sum_then = brightness(now), brightness(past)
     gain = gain_of(sum_now, sum_then)
     local = cv2.blur(gain, (SHADOW_WINDOW, SHADOW_WINDOW))
     shadow = (known[box] & (sum_then[inner] > SHADOW_MIN_SUM) & (gain[inner] > SHADOW_GAIN[0])
@@ -193,8 +193,9 @@ def dimmed(cur: np.ndarray, then: np.ndarray, known: np.ndarray, box: tuple[slic
     if where is not None:
         shadow &= where
     # the colour last, only where the rest holds (most pixels of a box are lit as before)
-    now, then = now[inner][shadow], then[inner][shadow]
-    shadow[shadow] = chroma_change(now, then, brightness(now), brightness(then)) < SHADOW_CHROMA
+    chroma = chroma_change(now[inner][shadow], past[inner][shadow],
+                           sum_now[inner][shadow], sum_then[inner][shadow])
+    shadow[shadow] = chroma < SHADOW_CHROMA
     return shadow
 
 
