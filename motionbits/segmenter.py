@@ -276,7 +276,14 @@ class MotionBitsSegmenter:
         # threads (numpy, scipy, torch on the CPU) only add hand-off and spin-waiting, which
         # multiplies their cost on a busy CPU. OpenCV's own thread pool is not affected.
         with self._threads.limit(limits=1):
-            result = self._update(frame)
+            try:
+                result = self._update(frame)
+            except BaseException:
+                # the second thread's work for this frame ends before the error reaches the
+                # caller (its tasks run in order: an empty one waits for them), so that
+                # nothing writes into the stream's state after, e.g., a reset()
+                self._helper.submit(int).result()
+                raise
             return result if self.refiner is None else self.refiner.apply(frame, result)
 
     def _update(self, frame: np.ndarray) -> MotionBitsResult:

@@ -68,3 +68,36 @@ def test_segmenters_on_two_threads_give_what_each_gives_alone():
             for (la, ta), (lb, tb) in zip(a, b):
                 np.testing.assert_array_equal(la, lb)
                 np.testing.assert_array_equal(np.array(ta), np.array(tb))
+
+
+def test_an_error_in_a_frame_waits_for_the_second_thread(monkeypatch):
+    """When a step of the main thread fails, the second thread's work for that frame has
+    ended by the time the error reaches the caller: a reset() after it is not overwritten."""
+    import threading
+    import time
+
+    import motionbits.segmenter as seg_module
+    from motionbits import MotionBitsSegmenter
+    from motionbits.synth import demo_clip
+
+    frames = demo_clip(n_frames=4, size=(240, 320)).frames
+    seg = MotionBitsSegmenter(MotionBitsConfig(n_nodes=2500, max_side=320))
+    for f in frames[:2]:
+        seg.update(f)
+    done = threading.Event()
+    remember = seg._remember
+
+    def slow_remember(*args):
+        time.sleep(0.3)
+        out = remember(*args)
+        done.set()
+        return out
+
+    def failing(*args, **kwargs):
+        raise RuntimeError("a step failed")
+
+    monkeypatch.setattr(seg, "_remember", slow_remember)
+    monkeypatch.setattr(seg_module, "join_flat_regions", failing)  # after the memories start
+    with pytest.raises(RuntimeError, match="a step failed"):
+        seg.update(frames[2])
+    assert done.is_set()
