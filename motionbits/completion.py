@@ -60,8 +60,8 @@ from motionbits.boxes import (at_border, grow_box, label_areas, label_boxes, non
                               pieces_holding)
 from motionbits.masks import EDGELESS_GRADIENT, drop_labels, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, WINDOW,
-                                 _color_difference, follow_known, follow_look, light_change,
-                                 texture_shows)
+                                 _color_difference, brightness, follow_known, follow_look,
+                                 gain_of, light_change, texture_shows)
 
 __all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook",
            "COMPLETION_REACH", "WIDER", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE",
@@ -499,13 +499,12 @@ class FirstLook:
         self._uncovered = found
         return sorted(found)
 
-    def changed(self, rgb: np.ndarray, box: tuple[slice, slice],
-                relit: np.ndarray | None = None) -> np.ndarray:
+    def changed(self, rgb: np.ndarray, box: tuple[slice, slice], relit: np.ndarray
+                ) -> np.ndarray:
         """(h, w) bool: pixels of the image box ``box`` of the (H, W, 3) uint8 frame
-        ``rgb`` that look otherwise than first seen, other than by a cast shadow
-        (:meth:`relit`; or ``relit``, (h, w) bool, where the caller has it already)."""
-        differs = self._differs(rgb, box)
-        return differs & ~(self.relit(rgb, box, differs) if relit is None else relit)
+        ``rgb`` that look otherwise than first seen, other than by a cast shadow (``relit``,
+        (h, w) bool, from :meth:`relit` at least where they differ)."""
+        return self._differs(rgb, box) & ~relit
 
     def _differs(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: known pixels of the box that differ from their first look by more
@@ -537,8 +536,8 @@ class FirstLook:
         of the ``SHADOW_WINDOW`` window (its median, in steps of 1/``GAIN_LEVELS``: a hard
         shadow edge in the window is no change of texture, as a window mean would read;
         :func:`motionbits.revealed.texture_shows`)."""
-        _, pixel_gain, sum_now, sum_then = light_change(rgb[box], self.look[box])
-        levels = np.clip(pixel_gain * GAIN_LEVELS, 0, 255).astype(np.uint8)
+        sum_now, sum_then = brightness(rgb[box]), brightness(self.look[box])
+        levels = np.clip(gain_of(sum_now, sum_then) * GAIN_LEVELS, 0, 255).astype(np.uint8)
         gain = cv2.medianBlur(levels, SHADOW_WINDOW).astype(np.float32) / GAIN_LEVELS
         return texture_shows(sum_now, sum_then, gain, self.tolerance)
 

@@ -281,7 +281,8 @@ def test_a_mark_that_stands_as_first_seen_is_found_and_a_moved_body_is_not():
     assert first.as_first_seen(labels, now).tolist() == [2, 4]
     # a third of the kicked block changed: 20 of its 60 columns
     moved = labels == 7
-    assert 0.3 < first.changed(now, (slice(0, 240), slice(0, 320)))[moved].mean() < 0.4
+    whole, every = (slice(0, 240), slice(0, 320)), np.ones((240, 320), bool)
+    assert 0.3 < first.changed(now, whole, first.relit(now, whole, every))[moved].mean() < 0.4
     assert first.as_first_seen(np.zeros_like(labels), now).size == 0
 
 
@@ -301,7 +302,8 @@ def test_a_mark_first_seen_in_part_and_a_little_changed_still_stands_as_first_se
     for side, share, found in ((6, (0.06, 0.08), [3]), (14, (0.11, 0.14), [])):
         now = first_rgb.copy()
         now[60:60 + side, 50:50 + side] = (200, 200, 40)
-        changed = first.changed(now, everywhere)[mark].sum() / first.known[mark].sum()
+        relit = first.relit(now, everywhere, np.ones((240, 320), bool))
+        changed = first.changed(now, everywhere, relit)[mark].sum() / first.known[mark].sum()
         assert share[0] < changed < share[1]
         assert first.as_first_seen(labels, now).tolist() == found
 
