@@ -87,11 +87,43 @@ def test_a_body_seen_moving_that_no_motionbit_followed_is_found_alone_and_whole(
     assert (out[40:70, 50:62] == 100).mean() > 0.8 and (out[40:70, 72:84] == 100).mean() > 0.8
     assert held.sum() < 1.1 * 720
     beside = labels.copy()
-    beside[40:70, 85:90] = 5  # a MotionBit touching it: not alone
+    beside[71:75, 50:84] = 5  # a MotionBit touching both faces: not alone
     assert not _find(memory, now, beside)
     fresh = Arrivals(table.shape[:2], COVERED, REST, TOLERANCE)  # nothing seen moving there
     fresh.update(table, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     assert not _find(fresh, now)
+
+
+def test_a_body_seen_moving_that_a_motionbit_only_grazed_is_found_alone():
+    """A block carried where a MotionBit held only its edge (the gripper's, over a strip
+    of it) and the flow read the rest moving stands at rest where the table was seen, near
+    a MotionBit at rest that it does not touch: a MotionBit passed over less than half of
+    it and it is not the rest of the one beside it, so it is a new MotionBit with no
+    parent. Where the flow saw nothing move it is left to the other rules; so is a block
+    touching a MotionBit."""
+    table = _table(5)
+    labels = np.zeros(table.shape[:2], np.int32)
+    labels[40:70, 90:96] = 5  # at rest, 10 px from the block
+
+    def memory(moved_there: bool) -> Arrivals:
+        arrivals = Arrivals(table.shape[:2], COVERED, REST, TOLERANCE)
+        arrivals.update(table, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
+        grazed, moved = labels.copy(), np.zeros(labels.shape, bool)
+        grazed[40:70, 50:58] = 7  # a MotionBit over the block's left edge, 8 of 30 px
+        moved[BLOCK] = moved_there
+        arrivals.update(table, np.zeros(labels.shape, bool), grazed, moved)
+        return arrivals
+
+    now = table.copy()
+    now[BLOCK] = (190, 50, 40)
+    (box, piece, parent), = _find(memory(True), now, labels)
+    found = np.zeros(labels.shape, bool)
+    found[box] = piece
+    assert parent == 0 and found[BLOCK].mean() > 0.85 and found.sum() < 1.1 * 900
+    assert _find(memory(False), now, labels) == []  # nothing seen moving: not this rule's
+    touching = labels.copy()
+    touching[40:70, 81:83] = 5
+    assert _find(memory(True), now, touching) == []
 
 
 def _first_look_then(first: np.ndarray, now: np.ndarray, labels: np.ndarray | None = None,
