@@ -45,8 +45,9 @@ is a new MotionBit of its own (its parts within one grid cell are one piece, and
 found at one frame within ``JOIN_CELLS`` grid cells are one body). Such pieces do not
 wait. docs/reading_the_paper.md, "Moving cameras", round 33. The same search takes the
 pieces of the first one that a MotionBit covered in less than half and that stand beside
-no MotionBit at rest, where the flow was seen moving on at least half of them (a block
-carried under a gripper whose MotionBit held only its edge; round 49).
+no MotionBit at rest, where the flow was seen moving on at least half of them and that
+stand out from their surroundings as the third search asks (below; a block carried under
+a gripper whose MotionBit held only its edge; round 49).
 
 Both searches miss a body that arrived where none of them looks, and one that stood still
 unlabelled for a frame: the memory then takes it for the static world. The scene's first
@@ -225,9 +226,12 @@ class Arrivals:
                 elif np.count_nonzero(visited) >= 0.5 * visited.size:  # a MotionBit passed
                     parent = int(np.bincount(visited)[1:].argmax()) + 1
                 else:
-                    # seen moving where a MotionBit passed over less than half of it: a
-                    # body that no MotionBit followed, if it is one
-                    if np.count_nonzero(self.stirred[at][piece]) >= 0.5 * visited.size:
+                    # seen moving where a MotionBit passed over less than half of it, and
+                    # standing out where the first look did not: a body that no MotionBit
+                    # followed, if it is one
+                    if (np.count_nonzero(self.stirred[at][piece]) >= 0.5 * visited.size
+                            and first_look is not None
+                            and _stands_out(cur, first_look, labels, at, piece)):
                         unfollowed[at] |= piece
                     continue
                 found.append((at, piece, parent))

@@ -98,12 +98,15 @@ def test_a_body_seen_moving_that_a_motionbit_only_grazed_is_found_alone():
     """A block carried where a MotionBit held only its edge (the gripper's, over a strip
     of it) and the flow read the rest moving stands at rest where the table was seen, near
     a MotionBit at rest that it does not touch: a MotionBit passed over less than half of
-    it and it is not the rest of the one beside it, so it is a new MotionBit with no
-    parent. Where the flow saw nothing move it is left to the other rules; so is a block
-    touching a MotionBit."""
+    it and it is not the rest of the one beside it, so, standing out from the table around
+    it where the first look saw none, it is a new MotionBit with no parent. Without the
+    first look, where the flow saw nothing move, or touching a MotionBit, it is left to the
+    other rules."""
     table = _table(5)
     labels = np.zeros(table.shape[:2], np.int32)
     labels[40:70, 90:96] = 5  # at rest, 10 px from the block
+    first_look = FirstLook(table.shape[:2], COVERED, TOLERANCE)
+    first_look.update(table, np.ones(labels.shape, bool), np.zeros(labels.shape, np.int32))
 
     def memory(moved_there: bool) -> Arrivals:
         arrivals = Arrivals(table.shape[:2], COVERED, REST, TOLERANCE)
@@ -116,14 +119,20 @@ def test_a_body_seen_moving_that_a_motionbit_only_grazed_is_found_alone():
 
     now = table.copy()
     now[BLOCK] = (190, 50, 40)
-    (box, piece, parent), = _find(memory(True), now, labels)
+    gray = _gray(now)
+
+    def find(arrivals: Arrivals, labels: np.ndarray, first: FirstLook | None = first_look):
+        return arrivals.find(now, gray, gray, labels, CELL, set(), first)
+
+    (box, piece, parent), = find(memory(True), labels)
     found = np.zeros(labels.shape, bool)
     found[box] = piece
     assert parent == 0 and found[BLOCK].mean() > 0.85 and found.sum() < 1.1 * 900
-    assert _find(memory(False), now, labels) == []  # nothing seen moving: not this rule's
+    assert find(memory(True), labels, None) == []  # no first look: not this rule's
+    assert find(memory(False), labels) == []  # nothing seen moving: not this rule's
     touching = labels.copy()
     touching[40:70, 81:83] = 5
-    assert _find(memory(True), now, touching) == []
+    assert find(memory(True), touching) == []
 
 
 def _first_look_then(first: np.ndarray, now: np.ndarray, labels: np.ndarray | None = None,
