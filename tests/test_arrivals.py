@@ -87,7 +87,7 @@ def test_a_body_seen_moving_that_no_motionbit_followed_is_found_alone_and_whole(
     assert (out[40:70, 50:62] == 100).mean() > 0.8 and (out[40:70, 72:84] == 100).mean() > 0.8
     assert held.sum() < 1.1 * 720
     beside = labels.copy()
-    beside[71:75, 50:84] = 5  # a MotionBit touching both faces: not alone
+    beside[40:70, 85:90] = 5  # a MotionBit touching it: not alone
     assert not _find(memory, now, beside)
     fresh = Arrivals(table.shape[:2], COVERED, REST, TOLERANCE)  # nothing seen moving there
     fresh.update(table, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
