@@ -221,16 +221,17 @@ class Arrivals:
             for at, piece, ring in self._pieces(candidate, fresh, around, cur, labels, cell):
                 body = _beside(ring, standing)
                 visited = self.visited[at][piece]
-                if body and piece.sum() <= self._largest.get(body, 0):
+                area = visited.size
+                if body and area <= self._largest.get(body, 0):
                     parent = body  # the rest of the body standing beside it
-                elif np.count_nonzero(visited) >= 0.5 * visited.size:  # a MotionBit passed
+                elif np.count_nonzero(visited) >= 0.5 * area:  # a MotionBit passed
                     parent = int(np.bincount(visited)[1:].argmax()) + 1
                 else:
                     # seen moving where a MotionBit passed over less than half of it, and
                     # standing out where the first look did not: a body that no MotionBit
-                    # followed, if it is one
-                    if (np.count_nonzero(self.stirred[at][piece]) >= 0.5 * visited.size
-                            and first_look is not None
+                    # followed, if it is one (the search below)
+                    if (first_look is not None
+                            and np.count_nonzero(self.stirred[at][piece]) >= 0.5 * area
                             and _stands_out(cur, first_look, labels, at, piece)):
                         unfollowed[at] |= piece
                     continue
