@@ -37,7 +37,13 @@ A mark at rest also gives back the pixels of its own mask that the cut puts on t
 background's side, when they are under ``TRIM_SHARE`` of it (the table beside a block
 that its motion's mask took along); a moving mark only grows. Within a stream, no cut
 adds a pixel that shows the scene first seen there under a cast shadow
-(:meth:`FirstLook.relit`; round 42).
+(:meth:`FirstLook.relit`; round 42). A mark at rest also gives back, however much of
+it they are, the pixels of its mask where the stream's memories see the static world
+under a cast shadow (``shadow``: :func:`motionbits.shadows.cast_shadows`) and the
+texture first seen there shows through, correlated (:func:`_shows_texture`), and the
+thin rim of mask left around them (the shadow test misses a shadow's hard edges): the
+block's shadow that its mark took along is often half of the mark, and then its colours
+are in the body's model and the cut keeps it (round 50).
 
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
@@ -66,7 +72,8 @@ from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, WIND
 __all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook",
            "COMPLETION_REACH", "WIDER", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE",
            "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED", "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST",
-           "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN", "TOUCH_SHARE"]
+           "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN", "SHADOW_RIM", "SHOWN_CORRELATION",
+           "SHOWN_SHARE", "TEXTURE_WINDOW", "SHADOW_TEXTURE", "TOUCH_SHARE"]
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
@@ -94,6 +101,20 @@ COMPLETION_ITERATIONS = 1
 #: went wrong, and the mark is left as its motion gives it).
 TRIM_SHARE = 0.5
 TRIM_OPEN = 3
+#: px: a mark at rest that gives back a cast shadow (``shadow`` of :func:`complete_masks`)
+#: also gives back what an opening by a square of this side removes from it within this
+#: reach of that shadow: the shadow's hard edges, which the shadow test misses (round 50).
+SHADOW_RIM = 5
+#: ... and gives back only the pieces of that shadow that show the texture first seen
+#: there (:func:`_shows_texture`): on this share or more of their textured pixels, grey
+#: levels correlated by this much or more over a window of this many px, where the first
+#: look's grey levels vary by this standard deviation or more (a plain table under a
+#: shadow and a dark, speckled cylinder over marble pass the shadow test alike; only the
+#: texture carried through tells them apart).
+SHOWN_CORRELATION = 0.5
+SHOWN_SHARE = 0.5
+TEXTURE_WINDOW = 9
+SHADOW_TEXTURE = 3.0
 #: px: a pixel the cut gives to a body is the table under a shadow where it has the
 #: chromaticity of the background within this window, dimmed (:func:`_shadowed`).
 COMPLETION_SHADOW_WINDOW = 31
@@ -149,7 +170,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
                    gradient: np.ndarray | None = None,
                    memory: CutMemory | None = None,
                    first_look: FirstLook | None = None,
-                   labels: Collection[int] | None = None) -> np.ndarray:
+                   labels: Collection[int] | None = None,
+                   shadow: np.ndarray | None = None) -> np.ndarray:
     """Grow each mask that reaches no image border over the rest of its body (GrabCut):
     every mask at rest, a moving one where its outline stops inside its body.
 
@@ -166,6 +188,11 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         first_look: the scene as first seen in the stream (:class:`FirstLook`); None:
             the cut starts from the mask alone.
         labels: the masks to grow; None: all.
+        shadow: (H, W) bool, where the static world shows under a cast shadow
+            (:func:`motionbits.shadows.cast_shadows`): no mask at rest keeps those of its
+            pixels that show the texture ``first_look`` saw there (nor the thin rim left
+            around them, ``SHADOW_RIM``) and no cut adds them; None (or no
+            ``first_look``): no such test.
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
@@ -190,7 +217,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         cut = None if memory is None or label in moving else memory.recall(label_map, label,
                                                                              box, rgb)
         if cut is None:
-            cut = _cut(label_map, label, box, rgb, out, first_look, trim=label not in moving)
+            cut = _cut(label_map, label, box, rgb, out, first_look, trim=label not in moving,
+                       shadow=shadow)
         if cut is None:
             continue
         if label not in moving:
@@ -277,19 +305,20 @@ class _Cut:
 
 
 def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.ndarray,
-         out: np.ndarray, first_look: FirstLook | None = None, trim: bool = False
-         ) -> _Cut | None:
+         out: np.ndarray, first_look: FirstLook | None = None, trim: bool = False,
+         shadow: np.ndarray | None = None) -> _Cut | None:
     """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
     around it, where no mask of ``out`` is yet -- starting on the body's side, with the
     mask, from what looks otherwise than ``first_look`` saw there -- less, if ``trim``,
-    the mask's pixels it gives to the background (``TRIM_SHARE``); None where it changes
-    nothing. A cut that runs out to its box's frame is tried once more in a box
-    ``WIDER`` times as far out: a top face's mark may be a small part of its body."""
+    the mask's pixels it gives to the background (``TRIM_SHARE``) and those under a cast
+    ``shadow`` ((H, W) bool or None); None where it changes nothing. A cut that runs out
+    to its box's frame is tried once more in a box ``WIDER`` times as far out: a top
+    face's mark may be a small part of its body."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
     for share in (COMPLETION_REACH, WIDER * COMPLETION_REACH):
         cut, ran_out = _cut_within(label_map, label, grow_box(
             box, int(share * side) + COMPLETION_MARGIN, label_map.shape), rgb, out, first_look,
-            trim)
+            trim, shadow)
         if not ran_out:
             return cut
     return None
@@ -297,7 +326,8 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
 
 def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
                 rgb: np.ndarray, out: np.ndarray, first_look: FirstLook | None,
-                trim: bool = False) -> tuple[_Cut | None, bool]:
+                trim: bool = False, shadow: np.ndarray | None = None
+                ) -> tuple[_Cut | None, bool]:
     """:func:`_cut` in the image box ``around``: (the cut or None, whether it ran out to
     the box's frame)."""
     rows, cols = around
@@ -315,13 +345,22 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
         return None, False
-    kept = _trimmed(mask, body) if trim else mask
+    cast = None  # the table under a cast shadow, showing the texture first seen there
+    if shadow is not None and first_look is not None and shadow[rows, cols].any():
+        cast = _shows_texture(rgb[rows, cols], first_look.look[rows, cols],
+                              shadow[rows, cols] & first_look.known[rows, cols])
+    if trim and cast is not None and (cast & mask).any():
+        kept = _without_shadow(_trimmed(mask & ~cast, body), cast & mask)
+    else:
+        kept = _trimmed(mask, body) if trim else mask
     # the pieces of the cut that hold mask pixels, where no mask is yet
     new = pieces_holding(body & (free | kept), kept) & free
     if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour),
         new &= ~_shadowed(rgb[rows, cols], free & ~new)  # by the colours around it
         if relit is not None:  # ... and by the scene first seen there (round 42)
             new &= ~relit
+        if cast is not None:  # ... and by the stream's memories (round 50)
+            new &= ~cast
     if not new.any():
         if kept is mask:
             return None, False
@@ -331,6 +370,41 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     if _reaches_frame(new):
         return None, True
     return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept | new), False
+
+
+def _shows_texture(rgb: np.ndarray, look: np.ndarray, shadow: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the pieces of ``shadow`` ((h, w) bool) through which the (h, w, 3) uint8
+    image shows the texture of ``look`` ((h, w, 3) uint8), dimmed or not: of a piece's
+    pixels where the look has texture (grey levels' standard deviation over
+    ``SHADOW_TEXTURE`` within ``TEXTURE_WINDOW`` px), at least ``SHOWN_SHARE`` have both
+    images' grey levels correlated by ``SHOWN_CORRELATION`` or more there. A shadow dims
+    a texture and keeps it (but for the window that straddles its hard edge); a body's
+    dark, speckled face over it has a texture of its own."""
+    now = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    then = cv2.cvtColor(look, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    window = (TEXTURE_WINDOW, TEXTURE_WINDOW)
+    mean_now, mean_then = cv2.blur(now, window), cv2.blur(then, window)
+    var_now = cv2.blur(now * now, window) - mean_now * mean_now
+    var_then = cv2.blur(then * then, window) - mean_then * mean_then
+    covariance = cv2.blur(now * then, window) - mean_now * mean_then
+    textured = shadow & (var_then > SHADOW_TEXTURE ** 2)
+    shown = textured & (covariance > SHOWN_CORRELATION
+                        * np.sqrt(np.maximum(var_now * var_then, 1e-6)))
+    n, pieces = cv2.connectedComponents(shadow.view(np.uint8), connectivity=8)
+    votes = np.bincount(pieces[textured], minlength=n)
+    agree = np.bincount(pieces[shown], minlength=n)
+    taken = (votes > 0) & (agree >= SHOWN_SHARE * votes)
+    taken[0] = False
+    return taken[pieces]
+
+
+def _without_shadow(kept: np.ndarray, shadow: np.ndarray) -> np.ndarray:
+    """(h, w) bool ``kept`` less its thin parts (those an opening by ``SHADOW_RIM`` px
+    removes) within ``SHADOW_RIM`` px of the (h, w) bool ``shadow`` it lost: the rim of a
+    cast shadow, whose hard edges the shadow test misses."""
+    square = np.ones((SHADOW_RIM, SHADOW_RIM), np.uint8)
+    thin = kept & ~(cv2.morphologyEx(kept.view(np.uint8), cv2.MORPH_OPEN, square) > 0)
+    return kept & ~(thin & (cv2.dilate(shadow.view(np.uint8), square) > 0))
 
 
 def _trimmed(mask: np.ndarray, body: np.ndarray) -> np.ndarray:

@@ -53,7 +53,7 @@ from motionbits.retirement import APART_CELLS, Origin, moved_once, retire, retir
 from motionbits.revealed import StaticMemory, carry_at_rest
 from motionbits.second_thread import second_thread
 from motionbits.setdown import SetDown
-from motionbits.shadows import cast_shadows, trim_shadows
+from motionbits.shadows import cast_shadows, shadow_map, trim_shadows
 from motionbits.temporal import TemporalState
 from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
@@ -556,7 +556,8 @@ class MotionBitsSegmenter:
             shadows, calm = remembered.result()
             first_look = self._first_look if calm is not None else None
             shown = complete_masks(hide_small(pieces, min_shown), cur, moving_marks, gradient,
-                                   self._cuts, first_look)
+                                   self._cuts, first_look,
+                                   shadow=shadow_map(shadows, cur.shape[:2]))
             shown = complete_small_marks(pieces, shown, cur, min_shown, moving_marks,
                                          gradient, first_look)
             # without the static world under a cast shadow (which moves with its body)

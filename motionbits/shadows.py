@@ -10,7 +10,10 @@ long enough for that memory to take it in, the scene as first seen
 (:class:`motionbits.completion.FirstLook`), dimmed. The masks shown leave such pixels out:
 
 - only where the remembered world has texture (mean gradient above ``TEXTURE`` grey
-  levels per px): on a flat table a flat face of a body in the table's hue, darker, passes
+  levels per px), each look on its own texture (round 50: the first look's dimmed look
+  was judged on the static memory's texture, which may hold the body set down there, its
+  edges textured; a grey block's dark face on a plain patch of marble passed for a
+  shadow): on a flat table a flat face of a body in the table's hue, darker, passes
   for a shadow, and nothing tells the two apart;
 - not where the memory holds the mark's own body, seen at rest (remembered with its id):
   a body that a shadow passes over is still the body;
@@ -37,7 +40,7 @@ from motionbits.evidence import gradient_magnitude
 from motionbits.masks import drop_labels, fill_holes
 from motionbits.revealed import StaticMemory, dimmed
 
-__all__ = ["cast_shadows", "trim_shadows", "TEXTURE", "OPEN", "BODY_SHARE"]
+__all__ = ["cast_shadows", "shadow_map", "trim_shadows", "TEXTURE", "OPEN", "BODY_SHARE"]
 
 #: Grey levels per px: the remembered world's mean gradient (5x5, then 7x7 mean) above which
 #: a dimmed look of it is told from a body's flat face (flat tables read 0.2-0.3, wood grain
@@ -76,10 +79,29 @@ def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray,
     shadow = memory.shadowed(cur, box, labels)
     if shadow is None:
         return None
-    if first is not None:
-        shadow |= dimmed(cur, first.look, first.known, box, memory.tolerance)
-    texture = cv2.blur(gradient_magnitude(memory.gray[box]), (7, 7))
-    return box, shadow & (texture > TEXTURE)
+    shadow &= _textured(memory.gray[box])
+    if first is not None:  # each look on its own texture
+        shadow |= (dimmed(cur, first.look, first.known, box, memory.tolerance)
+                   & _textured(cv2.cvtColor(first.look[box], cv2.COLOR_RGB2GRAY)))
+    return box, shadow
+
+
+def shadow_map(shadows: tuple[tuple[slice, slice], np.ndarray] | None,
+               shape: tuple[int, int]) -> np.ndarray | None:
+    """(H, W) bool of ``shape``: the pixels of :func:`cast_shadows`' answer, over the
+    whole frame (None: None)."""
+    if shadows is None:
+        return None
+    box, shadow = shadows
+    out = np.zeros(shape, bool)
+    out[box] = shadow
+    return out
+
+
+def _textured(gray: np.ndarray) -> np.ndarray:
+    """(h, w) bool: where the (h, w) grey look has texture (its gradient magnitude's
+    7x7 mean above ``TEXTURE``)."""
+    return cv2.blur(gradient_magnitude(gray.astype(np.float32)), (7, 7)) > TEXTURE
 
 
 def trim_shadows(shown: np.ndarray, shadows: tuple[tuple[slice, slice], np.ndarray] | None

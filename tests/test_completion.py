@@ -509,3 +509,45 @@ def test_the_shadow_tests_restricted_to_some_pixels_answer_there_as_on_the_whole
     dim = dimmed(now, look, first.known, box, 10.0)
     assert dim[20:120, 30:150].mean() > 0.8
     np.testing.assert_array_equal(dimmed(now, look, first.known, box, 10.0, where), dim & where)
+
+
+def _block_and_its_shadow() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A purple block (rows 80:140, cols 120:160) on the table, its cast shadow beside it
+    (cols 160:200: the table at half the light) and one mark over both (the clustering
+    gave the shadow the block's MotionBit): half of the mark is shadow."""
+    table = _table()
+    rgb = table.copy()
+    body = np.zeros((240, 320), bool)
+    body[80:140, 120:160] = True
+    shadow = np.zeros_like(body)
+    shadow[80:140, 160:200] = True
+    rgb[shadow] = (table[shadow] * 0.5).astype(np.uint8)
+    rgb[body] = (90, 30, 110)
+    labels = np.zeros((240, 320), np.int32)
+    labels[body | shadow] = 3
+    return rgb, body, shadow, labels
+
+
+def test_a_mark_at_rest_gives_back_the_cast_shadow_it_took_along_even_half_of_it():
+    rgb, body, shadow, labels = _block_and_its_shadow()
+    first = _first_look(_table(), (slice(0, 0), slice(0, 0)))  # the table, seen everywhere
+    found = np.zeros_like(shadow)  # as the shadow test finds it: short of its hard edges
+    found[82:138, 162:198] = True
+    out = complete_masks(labels, rgb, first_look=first, shadow=found)
+    assert (out[body] == 3).mean() > 0.98
+    assert (out[shadow] == 0).mean() > 0.94  # (the 2 px along the block stay with it)
+    assert (out[80:140, 196:200] == 0).all() and (out[80:82, 166:200] == 0).all()  # its rim
+    plain = complete_masks(labels, rgb, first_look=first)  # half the mark: too much for
+    assert (plain[shadow] == 3).mean() > 0.95  # the colours' trim
+
+
+def test_a_dark_speckled_face_that_passes_the_shadow_test_keeps_its_mark():
+    """The half of the mark beside the block is a dark face of the body with a speckle of
+    its own (a granite cylinder's side): darker than the table and, in its hue, flagged
+    by the shadow test -- but the table's texture does not show through it."""
+    rgb, body, shadow, labels = _block_and_its_shadow()
+    speckle = np.random.default_rng(5).uniform(20, 70, (240, 320)).astype(np.uint8)
+    rgb[shadow] = np.stack([speckle, speckle + 10, speckle], -1)[shadow]
+    first = _first_look(_table(), (slice(0, 0), slice(0, 0)))
+    out = complete_masks(labels, rgb, first_look=first, shadow=shadow)
+    assert (out[shadow] == 3).mean() > 0.95

@@ -472,3 +472,31 @@ def test_a_closed_face_partly_in_a_mask_seen_whole_is_completed():
     alone = np.zeros_like(labels)
     alone[40:80, 40:120] = 1  # 40% of the front and nothing else: the front is 2.5x it
     assert not trim_flat_background(alone, rgb)[front & (alone == 0)].any()
+
+
+def test_a_dimmed_first_look_is_judged_on_its_own_texture():
+    """Darker over a plain patch of the table as first seen, a face of the table's hue
+    looks like the table in shadow: no texture tells them apart, so it is not taken for a
+    shadow -- even where the static memory holds a textured look there (the body itself,
+    remembered at rest under another id, its edges textured; round 50)."""
+    flat = np.empty((*SIZE, 3), np.uint8)
+    flat[:] = (150, 120, 90)
+    cur = np.clip(flat * _shadow((100, 120), 40, 0.5, soft=2)[..., None], 0, 255)
+    cur = cur.astype(np.uint8)
+    textured = _texture(0)
+    memory = _remembered(textured)
+    gray = _gray(cur)
+    memory.observe(cur, gray, np.abs(gray - _gray(textured)))
+    first = FirstLook(SIZE, covered=20.0, tolerance=10.0)
+    first.update(flat, np.ones(SIZE, bool), np.zeros(SIZE, np.int32))
+    labels = _marks_on_shadow_and_body()
+    box, shadow = cast_shadows(memory, cur, labels, first)
+    core = np.zeros(SIZE, bool)
+    core[105:135, 95:125] = True
+    assert shadow[core[box]].mean() < 0.05
+    # the same first look, textured, dimmed by the same shadow: a shadow
+    first.update(textured, np.ones(SIZE, bool), np.zeros(SIZE, np.int32))
+    first.look[:], first.known[:] = textured, True
+    shaded = np.clip(textured * _shadow((100, 120), 40, 0.5, soft=2)[..., None], 0, 255)
+    box, shadow = cast_shadows(memory, shaded.astype(np.uint8), labels, first)
+    assert shadow[core[box]].mean() > 0.9
