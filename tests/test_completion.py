@@ -420,6 +420,20 @@ def test_a_cut_that_would_take_most_of_a_mark_away_leaves_it_as_it_is():
     assert (out[mostly_table == 3] == 3).all()
 
 
+def _block_and_its_shadow(width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A purple block (rows 80:140, cols 120:160) on the table and its cast shadow beside
+    it (``width`` px to its right: the table at half the light); (rgb, block, shadow)."""
+    table = _table()
+    rgb = table.copy()
+    body = np.zeros((240, 320), bool)
+    body[80:140, 120:160] = True
+    shadow = np.zeros_like(body)
+    shadow[80:140, 160:160 + width] = True
+    rgb[shadow] = (table[shadow] * 0.5).astype(np.uint8)
+    rgb[body] = (90, 30, 110)
+    return rgb, body, shadow
+
+
 def test_a_cut_does_not_take_the_table_first_seen_there_under_a_shadow(monkeypatch):
     """Whatever the cut's colour models take, the pixels that show the table as first
     seen, dimmed by a cast shadow, are not added to the body (the colours around a pixel
@@ -427,17 +441,10 @@ def test_a_cut_does_not_take_the_table_first_seen_there_under_a_shadow(monkeypat
     surroundings to be near)."""
     import motionbits.completion as completion
 
-    table = _table()
-    rgb = table.copy()
-    body = np.zeros((240, 320), bool)
-    body[80:140, 120:160] = True
-    shadow = np.zeros_like(body)
-    shadow[80:140, 160:180] = True
-    rgb[shadow] = (table[shadow] * 0.5).astype(np.uint8)
-    rgb[body] = (90, 30, 110)
+    rgb, body, shadow = _block_and_its_shadow(20)
     labels = np.zeros((240, 320), np.int32)
     labels[84:136, 124:156] = 3
-    first = _first_look(table, (slice(0, 0), slice(0, 0)))  # seen everywhere
+    first = _first_look(_table(), (slice(0, 0), slice(0, 0)))  # seen everywhere
     box = {}
 
     def cut_takes_the_shadow(image, trimap):  # the body and its shadow, in the cut's box
@@ -511,25 +518,18 @@ def test_the_shadow_tests_restricted_to_some_pixels_answer_there_as_on_the_whole
     np.testing.assert_array_equal(dimmed(now, look, first.known, box, 10.0, where), dim & where)
 
 
-def _block_and_its_shadow() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """A purple block (rows 80:140, cols 120:160) on the table, its cast shadow beside it
-    (cols 160:200: the table at half the light) and one mark over both (the clustering
-    gave the shadow the block's MotionBit): half of the mark is shadow."""
-    table = _table()
-    rgb = table.copy()
-    body = np.zeros((240, 320), bool)
-    body[80:140, 120:160] = True
-    shadow = np.zeros_like(body)
-    shadow[80:140, 160:200] = True
-    rgb[shadow] = (table[shadow] * 0.5).astype(np.uint8)
-    rgb[body] = (90, 30, 110)
+def _marked_with_its_shadow() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_block_and_its_shadow` with a shadow as wide as the block and one mark over
+    both (the clustering gave the shadow the block's MotionBit): half of the mark is
+    shadow."""
+    rgb, body, shadow = _block_and_its_shadow(40)
     labels = np.zeros((240, 320), np.int32)
     labels[body | shadow] = 3
     return rgb, body, shadow, labels
 
 
 def test_a_mark_at_rest_gives_back_the_cast_shadow_it_took_along_even_half_of_it():
-    rgb, body, shadow, labels = _block_and_its_shadow()
+    rgb, body, shadow, labels = _marked_with_its_shadow()
     first = _first_look(_table(), (slice(0, 0), slice(0, 0)))  # the table, seen everywhere
     found = np.zeros_like(shadow)  # as the shadow test finds it: short of its hard edges
     found[82:138, 162:198] = True
@@ -545,7 +545,7 @@ def test_a_dark_speckled_face_that_passes_the_shadow_test_keeps_its_mark():
     """The half of the mark beside the block is a dark face of the body with a speckle of
     its own (a granite cylinder's side): darker than the table and, in its hue, flagged
     by the shadow test -- but the table's texture does not show through it."""
-    rgb, body, shadow, labels = _block_and_its_shadow()
+    rgb, body, shadow, labels = _marked_with_its_shadow()
     speckle = np.random.default_rng(5).uniform(20, 70, (240, 320)).astype(np.uint8)
     rgb[shadow] = np.stack([speckle, speckle + 10, speckle], -1)[shadow]
     first = _first_look(_table(), (slice(0, 0), slice(0, 0)))
