@@ -26,7 +26,10 @@ long enough for that memory to take it in, the scene as first seen
   mark at rest).
 
 The state keeps the motion's masks; only the masks shown change (docs/results.md,
-"Cast shadows", round 27).
+"Cast shadows", round 27). Completion, before this step, gets the same pixels
+(:func:`shadow_map`; :func:`motionbits.completion.complete_masks`): a mark at rest gives
+back those through which the texture first seen there shows, however much of it they
+are (round 50).
 """
 
 from __future__ import annotations
@@ -34,18 +37,21 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.boxes import label_areas, nonzero_box, run_counts
+from motionbits.boxes import grow_box, label_areas, nonzero_box, run_counts
 from motionbits.completion import FirstLook
 from motionbits.evidence import gradient_magnitude
 from motionbits.masks import drop_labels, fill_holes
 from motionbits.revealed import StaticMemory, dimmed
 
-__all__ = ["cast_shadows", "shadow_map", "trim_shadows", "TEXTURE", "OPEN", "BODY_SHARE"]
+__all__ = ["cast_shadows", "shadow_map", "trim_shadows", "TEXTURE", "TEXTURE_REACH", "OPEN",
+           "BODY_SHARE"]
 
 #: Grey levels per px: the remembered world's mean gradient (5x5, then 7x7 mean) above which
 #: a dimmed look of it is told from a body's flat face (flat tables read 0.2-0.3, wood grain
 #: and marble 2-6 under the shadows of the pick-and-place track).
 TEXTURE = 1.0
+#: px: how far the texture test's answer at a pixel reads (Sobel 1, then means over 5 and 7).
+TEXTURE_REACH = 1 + 5 // 2 + 7 // 2
 #: px: pieces of shadow kept by an opening with a square of this side (at the working size).
 OPEN = 5
 #: A mark loses its shadow pixels when they are at most this share of it; beyond, it is a
@@ -80,9 +86,13 @@ def cast_shadows(memory: StaticMemory, cur: np.ndarray, labels: np.ndarray,
     if shadow is None:
         return None
     shadow &= _textured(memory.gray[box])
-    if first is not None:  # each look on its own texture
-        shadow |= (dimmed(cur, first.look, first.known, box, memory.tolerance)
-                   & _textured(cv2.cvtColor(first.look[box], cv2.COLOR_RGB2GRAY)))
+    if first is not None:  # each look on its own texture (tested only around what it finds)
+        seen = dimmed(cur, first.look, first.known, box, memory.tolerance)
+        if seen.any():
+            near = grow_box(nonzero_box(seen), TEXTURE_REACH, seen.shape)
+            look = first.look[box][near]
+            seen[near] &= _textured(cv2.cvtColor(look, cv2.COLOR_RGB2GRAY))
+            shadow |= seen
     return box, shadow
 
 
