@@ -40,8 +40,8 @@ adds a pixel that shows the scene first seen there under a cast shadow
 (:meth:`FirstLook.relit`; round 42). A mark at rest also gives back, however much of
 it they are, the pixels of its mask where the stream's memories see the static world
 under a cast shadow (``shadow``: :func:`motionbits.shadows.cast_shadows`) and the
-texture first seen there shows through, correlated (:func:`_shows_texture`), and the
-thin rim of mask left around them (the shadow test misses a shadow's hard edges): the
+texture first seen there shows through, correlated (:meth:`FirstLook.shows_texture`), and
+the thin rim of mask left around them (the shadow test misses a shadow's hard edges): the
 block's shadow that its mark took along is often half of the mark, and then its colours
 are in the body's model and the cut keeps it (round 50).
 
@@ -106,11 +106,11 @@ TRIM_OPEN = 3
 #: reach of that shadow: the shadow's hard edges, which the shadow test misses (round 50).
 SHADOW_RIM = 5
 #: ... and gives back only the pieces of that shadow that show the texture first seen
-#: there (:func:`_shows_texture`): on this share or more of their textured pixels, grey
-#: levels correlated by this much or more over a window of this many px, where the first
-#: look's grey levels vary by this standard deviation or more (a plain table under a
-#: shadow and a dark, speckled cylinder over marble pass the shadow test alike; only the
-#: texture carried through tells them apart).
+#: there (:meth:`FirstLook.shows_texture`): on this share or more of their textured
+#: pixels, grey levels correlated by this much or more over a window of this many px,
+#: where the first look's grey levels vary by this standard deviation or more (a plain
+#: table under a shadow and a dark, speckled cylinder over marble pass the shadow test
+#: alike; only the texture carried through tells them apart).
 SHOWN_CORRELATION = 0.5
 SHOWN_SHARE = 0.5
 TEXTURE_WINDOW = 9
@@ -346,9 +346,10 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     if body is None:
         return None, False
     cast = None  # the table under a cast shadow, showing the texture first seen there
-    if shadow is not None and first_look is not None and shadow[rows, cols].any():
-        cast = _shows_texture(rgb[rows, cols], first_look.look[rows, cols],
-                              shadow[rows, cols] & first_look.known[rows, cols])
+    if shadow is not None and first_look is not None:  # (tested where it could matter:
+        shaded = shadow[rows, cols] & first_look.known[rows, cols]  # the mark or its growth)
+        if (shaded & ((body & free) | (mask if trim else False))).any():
+            cast = first_look.shows_texture(rgb, (rows, cols), shaded)
     if trim and cast is not None and (cast & mask).any():
         kept = _without_shadow(_trimmed(mask & ~cast, body), cast & mask)
     else:
@@ -370,32 +371,6 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     if _reaches_frame(new):
         return None, True
     return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept | new), False
-
-
-def _shows_texture(rgb: np.ndarray, look: np.ndarray, shadow: np.ndarray) -> np.ndarray:
-    """(h, w) bool: the pieces of ``shadow`` ((h, w) bool) through which the (h, w, 3) uint8
-    image shows the texture of ``look`` ((h, w, 3) uint8), dimmed or not: of a piece's
-    pixels where the look has texture (grey levels' standard deviation over
-    ``SHADOW_TEXTURE`` within ``TEXTURE_WINDOW`` px), at least ``SHOWN_SHARE`` have both
-    images' grey levels correlated by ``SHOWN_CORRELATION`` or more there. A shadow dims
-    a texture and keeps it (but for the window that straddles its hard edge); a body's
-    dark, speckled face over it has a texture of its own."""
-    now = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
-    then = cv2.cvtColor(look, cv2.COLOR_RGB2GRAY).astype(np.float32)
-    window = (TEXTURE_WINDOW, TEXTURE_WINDOW)
-    mean_now, mean_then = cv2.blur(now, window), cv2.blur(then, window)
-    var_now = cv2.blur(now * now, window) - mean_now * mean_now
-    var_then = cv2.blur(then * then, window) - mean_then * mean_then
-    covariance = cv2.blur(now * then, window) - mean_now * mean_then
-    textured = shadow & (var_then > SHADOW_TEXTURE ** 2)
-    shown = textured & (covariance > SHOWN_CORRELATION
-                        * np.sqrt(np.maximum(var_now * var_then, 1e-6)))
-    n, pieces = cv2.connectedComponents(shadow.view(np.uint8), connectivity=8)
-    votes = np.bincount(pieces[textured], minlength=n)
-    agree = np.bincount(pieces[shown], minlength=n)
-    taken = (votes > 0) & (agree >= SHOWN_SHARE * votes)
-    taken[0] = False
-    return taken[pieces]
 
 
 def _without_shadow(kept: np.ndarray, shadow: np.ndarray) -> np.ndarray:
@@ -603,6 +578,33 @@ class FirstLook:
         relit[where] = ((chroma < SHADOW_CHROMA) & (gain > SHADOW_GAIN[0])
                         & (gain < SHADOW_GAIN[1]))
         return relit
+
+    def shows_texture(self, rgb: np.ndarray, box: tuple[slice, slice], shadow: np.ndarray
+                      ) -> np.ndarray:
+        """(h, w) bool: the pieces of ``shadow`` ((h, w) bool, in the image box ``box``)
+        through which the (H, W, 3) uint8 frame ``rgb`` shows the texture first seen there,
+        dimmed or not: of a piece's pixels where the first look has texture (grey levels'
+        standard deviation over ``SHADOW_TEXTURE`` within ``TEXTURE_WINDOW`` px), at least
+        ``SHOWN_SHARE`` have both images' grey levels correlated by ``SHOWN_CORRELATION``
+        or more there. A shadow dims a texture and keeps it (but for the window that
+        straddles its hard edge); a body's dark, speckled face over it has a texture of its
+        own."""
+        now = cv2.cvtColor(rgb[box], cv2.COLOR_RGB2GRAY).astype(np.float32)
+        then = cv2.cvtColor(self.look[box], cv2.COLOR_RGB2GRAY).astype(np.float32)
+        window = (TEXTURE_WINDOW, TEXTURE_WINDOW)
+        mean_now, mean_then = cv2.blur(now, window), cv2.blur(then, window)
+        var_now = cv2.blur(now * now, window) - mean_now * mean_now
+        var_then = cv2.blur(then * then, window) - mean_then * mean_then
+        covariance = cv2.blur(now * then, window) - mean_now * mean_then
+        textured = shadow & (var_then > SHADOW_TEXTURE ** 2)
+        shown = textured & (covariance > SHOWN_CORRELATION
+                            * np.sqrt(np.maximum(var_now * var_then, 1e-6)))
+        n, pieces = cv2.connectedComponents(shadow.view(np.uint8), connectivity=8)
+        votes = np.bincount(pieces[textured], minlength=n)
+        agree = np.bincount(pieces[shown], minlength=n)
+        taken = (votes > 0) & (agree >= SHOWN_SHARE * votes)
+        taken[0] = False
+        return taken[pieces]
 
     def texture_kept(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: where the first look's texture shows through the (H, W, 3) uint8

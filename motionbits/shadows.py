@@ -111,7 +111,7 @@ def shadow_map(shadows: tuple[tuple[slice, slice], np.ndarray] | None,
 def _textured(gray: np.ndarray) -> np.ndarray:
     """(h, w) bool: where the (h, w) grey look has texture (its gradient magnitude's
     7x7 mean above ``TEXTURE``)."""
-    return cv2.blur(gradient_magnitude(gray.astype(np.float32)), (7, 7)) > TEXTURE
+    return cv2.blur(gradient_magnitude(gray.astype(np.float32, copy=False)), (7, 7)) > TEXTURE
 
 
 def trim_shadows(shown: np.ndarray, shadows: tuple[tuple[slice, slice], np.ndarray] | None
