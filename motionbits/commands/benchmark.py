@@ -86,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
     from motionbits.baselines import available_methods, make_method
     from motionbits.eval.benchmark import run_benchmark
     from motionbits.eval.kinds import format_breakdowns
+    from motionbits.eval.losses import format_losses
     from motionbits.eval.table import format_table, json_ready
 
     if args.list:
@@ -124,6 +125,8 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled", seconds_per_frame=spf), end="")
+    print()
+    print(format_losses(results), end="")
     breakdowns = format_breakdowns(results)
     if breakdowns:  # scenes of motionbits synth name their bodies' kinds and roles
         print()

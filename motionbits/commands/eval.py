@@ -58,6 +58,7 @@ def parse_pred_spec(spec: str) -> tuple[str, Path]:
 def run(args: argparse.Namespace) -> int:
     from motionbits.eval.dataset import evaluate_dataset
     from motionbits.eval.kinds import format_breakdowns
+    from motionbits.eval.losses import format_losses
     from motionbits.eval.table import format_table, json_ready
 
     if args.json is not None:
@@ -79,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled"), end="")
+    print()
+    print(format_losses(results), end="")
     breakdowns = format_breakdowns(results)
     if breakdowns:  # scenes of motionbits synth name their bodies' kinds and roles
         print()

@@ -12,6 +12,7 @@ MoRiBo-format folders (scenes, tracks, ``evaluate_dataset``) are in
     scenes_from_sequence(src, out)                          DAVIS-style sequence -> scenes
     body_kinds(scene) / iou_by_kind(per_scene, kinds)       mean IoU per kind of body
     body_roles(scene)                                       agent, carried, knocked, pushed...
+    loss_budget(per_scene)                                  100 - mIoU by how each mark fails
     compare_runs(a, b) / format_comparison(result)         two runs on the same scenes
     scene_changes(a, b) / format_scene_changes(rows)        ... which scenes moved, how
 """
@@ -21,6 +22,7 @@ from motionbits.eval.boundary import boundary_counts, boundary_map, boundary_tol
 from motionbits.eval.compare import (compare_runs, format_comparison, format_scene_changes,
                                      scene_changes)
 from motionbits.eval.kinds import body_kinds, body_roles, iou_by_kind
+from motionbits.eval.losses import loss_budget
 from motionbits.eval.labelmaps import read_label_map, write_label_map
 from motionbits.eval.matching import hungarian_match
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
@@ -46,6 +48,7 @@ __all__ = [
     "body_kinds",
     "iou_by_kind",
     "body_roles",
+    "loss_budget",
     "compare_runs",
     "format_comparison",
     "scene_changes",

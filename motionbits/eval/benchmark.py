@@ -19,6 +19,7 @@ from motionbits.eval.dataset import (
     discover_scenes, load_scene, summarize_tracks,
 )
 from motionbits.eval.kinds import body_kinds_and_roles, iou_by_kind
+from motionbits.eval.losses import loss_budget
 from motionbits.eval.labelmaps import write_label_map
 from motionbits.eval.metrics import FrameScores, evaluate_frame
 from motionbits.objects import check_label_map
@@ -47,8 +48,8 @@ def run_benchmark(
 
     Returns:
         ``(results, seconds_per_frame)``: per method the dict of
-        :func:`motionbits.eval.dataset.evaluate_dataset` (with its ``by_kind`` and
-        ``by_role``), and its mean seconds per frame.
+        :func:`motionbits.eval.dataset.evaluate_dataset` (with its ``by_kind``,
+        ``by_role`` and ``losses``), and its mean seconds per frame.
         A method that raises ImportError (its package or model is not installed) is
         dropped with a warning on stderr instead of stopping the run.
 
@@ -102,7 +103,8 @@ def run_benchmark(
             continue
         results[name] = {**summarize_tracks(by_track[name]), "per_scene": per_scene[name],
                          "by_kind": iou_by_kind(per_scene[name], kinds),
-                         "by_role": iou_by_kind(per_scene[name], roles)}
+                         "by_role": iou_by_kind(per_scene[name], roles),
+                         "losses": loss_budget(per_scene[name])}
     if not results:
         raise ImportError(f"no method could run: {unavailable}")
     spf = {m: seconds[m] / max(n_frames, 1) for m in results}

@@ -25,6 +25,7 @@ import numpy as np
 from tqdm import tqdm
 
 from motionbits.eval.kinds import body_kinds_and_roles, iou_by_kind
+from motionbits.eval.losses import loss_budget
 from motionbits.eval.labelmaps import read_label_map
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 from motionbits.frames import whole_number
@@ -254,7 +255,9 @@ def evaluate_dataset(
         {"track/scene": FrameScores.to_dict()}`` and ``"by_kind"`` (mean IoU per track and
         kind of body, :func:`motionbits.eval.kinds.iou_by_kind`; empty where ``meta.json``
         names no kinds) and ``"by_role"`` (the same per role of body,
-        :func:`motionbits.eval.kinds.body_roles`); scores are fractions in [0, 1] except
+        :func:`motionbits.eval.kinds.body_roles`) and ``"losses"`` (each track's
+        ``100 - mIoU`` by how each body's mark fails, :func:`motionbits.eval.losses.loss_budget`,
+        in points); scores are fractions in [0, 1] except
         ``spurious`` (predicted objects per scene).
     """
     if missing not in ("error", "empty"):
@@ -288,4 +291,5 @@ def evaluate_dataset(
         per_scene[scene.key] = scores.to_dict()
         kinds[scene.key], roles[scene.key] = body_kinds_and_roles(scene.path)
     return {**summarize_tracks(by_track), "per_scene": per_scene,
-            "by_kind": iou_by_kind(per_scene, kinds), "by_role": iou_by_kind(per_scene, roles)}
+            "by_kind": iou_by_kind(per_scene, kinds), "by_role": iou_by_kind(per_scene, roles),
+            "losses": loss_budget(per_scene)}
