@@ -1,6 +1,7 @@
 """Where the mIoU points go: each body's loss by how its mark fails (``motionbits eval`` and
 ``motionbits benchmark``)."""
 
+import json
 import math
 
 import numpy as np
@@ -78,3 +79,23 @@ def test_the_benchmark_splits_each_tracks_loss_and_matches_its_miou(tmp_path):
 def test_no_bodies_no_table():
     assert loss_budget({"t/a": {"instances": []}}) == {}
     assert format_losses({"m": {"losses": {}}}) == ""
+
+
+def test_motionbits_eval_prints_and_writes_where_the_points_go(tmp_path, capsys):
+    from motionbits.cli import main
+    from motionbits.eval import write_label_map
+
+    shape = (48, 64)
+    gt = squares(shape, (4, 4, 10), (4, 30, 10))
+    make_scene(tmp_path / "gt" / "robot", "a", gt)
+    pred = np.zeros(shape, np.int32)
+    pred[4:9, 4:14] = 1  # half of the first square; the second missed
+    write_label_map(tmp_path / "pred" / "robot" / "a.png", pred)
+    assert main(["eval", "--gt", str(tmp_path / "gt"), "--pred", f"m={tmp_path / 'pred'}",
+                 "--json", str(tmp_path / "out.json"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "[where the mIoU points go]" in out
+    row = next(line for line in out.splitlines() if line.startswith("robot") and " m " in line)
+    assert row.split()[3:6] == ["25.0", "50.0", "25.0"]  # mIoU, missed, short
+    saved = json.loads((tmp_path / "out.json").read_text())["losses"]["robot"]
+    assert saved["missed"] == pytest.approx(50.0) and saved["short"] == pytest.approx(25.0)

@@ -125,8 +125,10 @@ def run(args: argparse.Namespace) -> int:
     if args.pooled:
         print()
         print(format_table(results, block="pooled", seconds_per_frame=spf), end="")
-    print()
-    print(format_losses(results), end="")
+    losses = format_losses(results)
+    if losses:  # every scored body, by how its mark fails
+        print()
+        print(losses, end="")
     breakdowns = format_breakdowns(results)
     if breakdowns:  # scenes of motionbits synth name their bodies' kinds and roles
         print()

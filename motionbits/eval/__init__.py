@@ -22,8 +22,8 @@ from motionbits.eval.boundary import boundary_counts, boundary_map, boundary_tol
 from motionbits.eval.compare import (compare_runs, format_comparison, format_scene_changes,
                                      scene_changes)
 from motionbits.eval.kinds import body_kinds, body_roles, iou_by_kind
-from motionbits.eval.losses import loss_budget
 from motionbits.eval.labelmaps import read_label_map, write_label_map
+from motionbits.eval.losses import loss_budget
 from motionbits.eval.matching import hungarian_match
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 from motionbits.eval.overlap import contingency, overlap_scores

@@ -19,8 +19,8 @@ from motionbits.eval.dataset import (
     discover_scenes, load_scene, summarize_tracks,
 )
 from motionbits.eval.kinds import body_kinds_and_roles, iou_by_kind
-from motionbits.eval.losses import loss_budget
 from motionbits.eval.labelmaps import write_label_map
+from motionbits.eval.losses import loss_budget
 from motionbits.eval.metrics import FrameScores, evaluate_frame
 from motionbits.objects import check_label_map
 

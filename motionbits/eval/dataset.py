@@ -25,8 +25,8 @@ import numpy as np
 from tqdm import tqdm
 
 from motionbits.eval.kinds import body_kinds_and_roles, iou_by_kind
-from motionbits.eval.losses import loss_budget
 from motionbits.eval.labelmaps import read_label_map
+from motionbits.eval.losses import loss_budget
 from motionbits.eval.metrics import FP_KEYS, METRIC_KEYS, FrameScores, evaluate_frame, summarize
 from motionbits.frames import whole_number
 from motionbits.video import check_no_broken_links, frame_order, is_frame_file
