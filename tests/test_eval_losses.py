@@ -99,3 +99,30 @@ def test_motionbits_eval_prints_and_writes_where_the_points_go(tmp_path, capsys)
     assert row.split()[3:6] == ["25.0", "50.0", "25.0"]  # mIoU, missed, short
     saved = json.loads((tmp_path / "out.json").read_text())["losses"]["robot"]
     assert saved["missed"] == pytest.approx(50.0) and saved["short"] == pytest.approx(25.0)
+
+
+def test_motionbits_compare_shows_where_each_runs_points_go(tmp_path, capsys):
+    from motionbits.cli import main
+    from motionbits.eval import write_label_map
+
+    shape = (48, 64)
+    gt = squares(shape, (4, 4, 10), (4, 30, 10))
+    make_scene(tmp_path / "gt" / "robot", "a", gt)
+    half = np.zeros(shape, np.int32)
+    half[4:9, 4:14] = 1  # run A: half of the first square
+    whole = half.copy()
+    whole[4:14, 4:14] = 1  # run B: all of it
+    for name, pred in (("a", half), ("b", whole)):
+        write_label_map(tmp_path / name / "robot" / "a.png", pred)
+        assert main(["eval", "--gt", str(tmp_path / "gt"), "--pred", str(tmp_path / name),
+                     "--json", str(tmp_path / f"{name}.json"), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["compare", str(tmp_path / "a.json"), str(tmp_path / "b.json"),
+                 "--json", str(tmp_path / "ab.json")]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()
+            if line.startswith("robot") and line.split()[1] in ("A", "B")]
+    assert [r[1] for r in rows] == ["A", "B"]
+    assert rows[0][5] == "25.0" and rows[1][5] == "0.0"  # short: half a body, then none
+    assert rows[1][4] == "50.0" and rows[1][8] == "0.0"  # B: the second square still missed
+    saved = json.loads((tmp_path / "ab.json").read_text())["losses"]
+    assert saved["B"]["robot"]["mIoU"] == pytest.approx(50.0)

@@ -109,6 +109,7 @@ def _is_number(value) -> bool:
 def run(args: argparse.Namespace) -> int:
     from motionbits.eval.compare import (compare_runs, format_comparison,
                                          format_scene_changes, scene_changes)
+    from motionbits.eval.losses import format_losses, loss_budget
     from motionbits.eval.table import json_ready
 
     if not 0.0 < args.level < 1.0:  # else the library's message names ``level``
@@ -123,6 +124,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("no track of these runs has a GT body to compare")
     print(format_comparison(result, names=("A", "B"), level=args.level), end="")
     saved = {"a": str(args.a), "b": str(args.b), "level": args.level, "tracks": result}
+    # where each run's points go (runs saved before the marks' P and R were kept: not shown)
+    if all("P" in i and "R" in i for run in (a, b) for v in run.values() for i in v["instances"]):
+        saved["losses"] = {"A": loss_budget(a), "B": loss_budget(b)}
+        print()
+        print(format_losses({n: {"losses": v} for n, v in saved["losses"].items()}), end="")
     if args.scenes:
         moved = scene_changes(a, b)[:args.scenes]
         print(f"\nthe {len(moved)} scenes that changed most:")
