@@ -17,7 +17,7 @@ import math
 from pathlib import Path
 
 __all__ = ["body_kinds", "body_roles", "body_kinds_and_roles", "iou_by_kind",
-           "format_kinds", "format_breakdowns", "AGENT_KINDS"]
+           "format_kinds", "format_breakdowns", "scene_track", "AGENT_KINDS"]
 
 #: Kinds of the agents of ``motionbits synth`` (a gripper or hand scored as a body).
 AGENT_KINDS = frozenset({"gripper", "hand", "pusher"})
@@ -100,6 +100,11 @@ def _roles(meta: dict) -> dict[int, str]:
     return roles
 
 
+def scene_track(key: str) -> str:
+    """The track of a scene key ``"<track>/<scene>"`` (a key without a track: itself)."""
+    return key.rsplit("/", 1)[0] if "/" in key else key
+
+
 def iou_by_kind(per_scene: dict[str, dict], kinds: dict[str, dict[int, str]]
                 ) -> dict[str, dict[str, dict[str, float]]]:
     """Mean IoU of the ground-truth bodies of each kind (or role), per track, and the share
@@ -117,7 +122,7 @@ def iou_by_kind(per_scene: dict[str, dict], kinds: dict[str, dict[int, str]]
     sums: dict[str, dict[str, list[float]]] = {}
     for key, scores in per_scene.items():
         named = kinds.get(key) or {}
-        track = key.rsplit("/", 1)[0] if "/" in key else key
+        track = scene_track(key)
         for inst in scores.get("instances", []):
             kind = named.get(int(inst["gt"]))
             iou = inst.get("IoU")

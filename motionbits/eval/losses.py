@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import math
 
+from motionbits.eval.kinds import scene_track
+
 __all__ = ["FAILURES", "CLOSE", "SIDE", "failure", "loss_budget", "format_losses"]
 
 #: How a body's mark fails, in the order the tables show them.
@@ -56,23 +58,20 @@ def loss_budget(per_scene: dict[str, dict]) -> dict[str, dict[str, float]]:
         "close": points}}``; the points of a track sum to ``100 - mIoU``. Tracks without
         a body are left out.
     """
-    losses: dict[str, dict[str, float]] = {}
-    counts: dict[str, int] = {}
+    bodies: dict[str, list[tuple[str, float]]] = {}  # track -> (failure, loss) per body
     for key, scores in per_scene.items():
-        track = key.rsplit("/", 1)[0] if "/" in key else key
         for inst in scores.get("instances", []):
             iou = inst.get("IoU")
             if iou is None or math.isnan(iou):
                 continue
             kind = failure(float(iou), float(inst.get("P", 0.0)), float(inst.get("R", 0.0)))
-            sums = losses.setdefault(track, dict.fromkeys(FAILURES, 0.0))
-            sums[kind] += 100.0 * (1.0 - float(iou))
-            counts[track] = counts.get(track, 0) + 1
+            bodies.setdefault(scene_track(key), []).append((kind, 100.0 * (1.0 - float(iou))))
     out = {}
-    for track, sums in losses.items():
-        n = counts[track]
-        points = {k: v / n for k, v in sums.items()}
-        out[track] = {"n": n, "mIoU": 100.0 - sum(points.values()), **points}
+    for track, rows in bodies.items():
+        points = dict.fromkeys(FAILURES, 0.0)
+        for kind, loss in rows:
+            points[kind] += loss / len(rows)
+        out[track] = {"n": len(rows), "mIoU": 100.0 - sum(points.values()), **points}
     return out
 
 
