@@ -32,7 +32,11 @@ pieces apart for good. This module joins them again at the level of MotionBit id
   have a cluster and one moves while the other stands still; at two such frames in a row
   they are different bodies for good (a block set down and the hand that carried it,
   which agreed while they moved as one: round 26,
-  docs/reading_the_paper.md, "Bodies set down apart");
+  docs/reading_the_paper.md, "Bodies set down apart"); from the first such frame on they
+  are shown apart where one motion fitted to both explains them clearly worse than their
+  own motions do (the block set down and its carrier: not a slow link of an arm and its
+  fast one), and together again if the run ends (a block set down at the clip's last
+  frame is shown as it stands, not under its carrier's mark: round 52);
 - MotionBits that agreed at some frame and never disagreed form one group, shown under the
   group's oldest id. Disagreement is final between the two; between groups it is
   outweighed when the groups agreed across at ``OUTWEIGH`` times as many frames as they
@@ -51,7 +55,7 @@ per pair); nothing grows with the video's length except the number of ids.
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from functools import cache
 
 import cv2
@@ -303,6 +307,7 @@ class MotionBitGroups:
         self._doubt: set[tuple[int, int]] = set()  # born still beside the other's motion
         self._forbidden: set[tuple[int, int]] = set()  # disagreements nothing outweighs
         self._apart: dict[tuple[int, int], int] = {}  # frames in a row seen apart (observe_apart)
+        self._apart_now: set[tuple[int, int]] = set()  # ... of which seen apart at this frame
 
     @staticmethod
     def _key(a: int, b: int) -> tuple[int, int]:
@@ -352,7 +357,8 @@ class MotionBitGroups:
             self._excess[key] = self._excess.get(key, 0.0) + excess / max(moved, MIN_MOVED)
 
     def observe_apart(self, touching: set[tuple[int, int]], clustered: set[int],
-                      moving: set[int]) -> None:
+                      moving: set[int],
+                      differ: Callable[[int, int], bool] | None = None) -> None:
         """Record this frame's evidence on the pairs seen agreeing before that no longer
         touch (``touching``: the pairs (a, b), a < b, that do) and both have a cluster now
         (``clustered``): one moving (``moving``) while the other stands still is a frame
@@ -360,7 +366,12 @@ class MotionBitGroups:
         in a row they are different bodies for good. One twist trajectory is one MotionBit:
         a block set down and the hand that carried it agreed while it carried it (or once,
         where the block's flat faces could not tell), then the hand moves on while the
-        block stands."""
+        block stands. Until the next call, :meth:`representatives` keeps the pairs seen
+        apart at this frame for which ``differ(a, b)`` is true (one motion cannot explain
+        both now; None: every such pair) in different groups: the block is shown apart
+        from the first frame apart on (at a clip's last frame there is no second), the
+        slow link of an arm beside its fast one is not."""
+        self._apart_now = set()
         for key in list(self._agree):
             a, b = key
             if key in touching or a not in clustered or b not in clustered:
@@ -369,6 +380,8 @@ class MotionBitGroups:
                 self._apart.pop(key, None)
                 continue
             self._apart[key] = self._apart.get(key, 0) + 1
+            if differ is None or differ(a, b):
+                self._apart_now.add(key)
             if self._apart[key] >= DISAGREE_FRAMES:
                 del self._apart[key]
                 self.forbid(a, [b])
@@ -379,9 +392,10 @@ class MotionBitGroups:
         first, undoubted pairs (:meth:`doubt`) before doubtful ones, then those whose
         union motion explained both better (the smaller mean excess per px moved): a
         piece that agreed with two MotionBits that disagree joins the one it agreed with
-        more often, or without doubt, or more closely. Two groups do not join across a forbidden pair (:meth:`forbid`),
-        nor across pairs that disagreed unless the pairs across them agreed at
-        ``OUTWEIGH`` times as many frames as there are disagreeing ones."""
+        more often, or without doubt, or more closely. Two groups do not join across a
+        forbidden pair (:meth:`forbid`) or a pair seen apart at this frame
+        (:meth:`observe_apart`), nor across pairs that disagreed unless the pairs across
+        them agreed at ``OUTWEIGH`` times as many frames as there are disagreeing ones."""
         ids = sorted(int(i) for i in ids)
         present = set(ids)
         rep = {i: i for i in ids}
@@ -394,7 +408,7 @@ class MotionBitGroups:
             if ra == rb:
                 continue
             across = [self._key(x, y) for x in members[ra] for y in members[rb]]
-            if any(key in self._forbidden for key in across):
+            if any(key in self._forbidden or key in self._apart_now for key in across):
                 continue
             split = sum(key in self._disagree for key in across)
             if split and sum(self._agree.get(key, 0) for key in across) < OUTWEIGH * split:
@@ -443,7 +457,9 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
                      min_agreeing: float = 0.0) -> None:
     """Record in ``groups`` this frame's evidence on every pair of touching MotionBits,
     and on the pairs seen agreeing before that no longer touch
-    (:meth:`MotionBitGroups.observe_apart`).
+    (:meth:`MotionBitGroups.observe_apart`; such a pair, one moving and the other still,
+    is shown apart at this frame where the affine motion fitted to both explains one of
+    them worse than its own motion by more than ``disagree``, :func:`union_excess`).
 
     A MotionBit born now out of pixels never in a MotionBit and seen standing still while
     a moving older MotionBit moved (``BORN_FRESH`` of its nodes, seen still at or after
@@ -494,7 +510,15 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
             groups.inherit(x, int(parents[1:].argmax()) + 1)
     boxes = cache(lambda: label_boxes(labels))  # once, if a pair asks
     touching = touching_pairs(labels, reach=reach)
-    groups.observe_apart(touching, set(own), moving)
+
+    def differ(a: int, b: int) -> bool:  # one motion cannot explain both
+        if any(x > len(boxes()) or boxes()[x - 1] is None for x in (a, b)):
+            return False  # a cluster without pixels: nothing to tell
+        sel = (node_ids == a) | (node_ids == b)
+        union = fit_affine(grid.points[sel], back_points[sel], reliability[sel])
+        return union_excess(labels, a, b, boxes(), own[a], own[b], union, cur, prev) > disagree
+
+    groups.observe_apart(touching, set(own), moving, differ)
     for a, b in touching:
         if groups.known(a, b):
             continue

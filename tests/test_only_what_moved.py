@@ -15,6 +15,7 @@ from motionbits.merging import (OUTWEIGH, MotionBitGroups, apply_joins, drop_see
 from motionbits.nodes import NodeGrid
 from motionbits.revealed import StaticMemory
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
+from motionbits.twists import rigid_matrix
 
 SIZE = (240, 320)
 CONFIG = MotionBitsConfig(n_nodes=2500, max_side=max(SIZE))
@@ -96,21 +97,57 @@ def test_a_body_set_down_leaves_the_group_of_the_hand_that_carried_it():
     """The hand 2 and the block 5 it carried agreed at four frames; the hand lets go and
     moves on, no longer touching the block, which stands still. After DISAGREE_FRAMES
     such frames in a row they are two groups for good; a frame at which both move (or
-    they touch) ends the run; pieces still touching are left to the touching test."""
+    they touch) ends the run; pieces still touching are left to the touching test.
+    At a frame apart they are shown apart already (a block set down at the clip's last
+    frame has no second), and together again when the run ends."""
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     for _ in range(4):
         groups.observe(2, 5, 0.3, moved=4.0)
     assert groups.representatives([2, 5]) == {2: 2, 5: 2}
     groups.observe_apart(set(), {2, 5}, {2})  # the hand moves, the block stands
+    assert groups.representatives([2, 5]) == {2: 2, 5: 5}  # shown apart this frame
     groups.observe_apart(set(), {2, 5}, {2, 5})  # both moved: the run ends
-    groups.observe_apart(set(), {2, 5}, {2})
     assert groups.representatives([2, 5]) == {2: 2, 5: 2}
+    groups.observe_apart(set(), {2, 5}, {2})
+    assert groups.representatives([2, 5]) == {2: 2, 5: 5}
     groups.observe_apart({(2, 5)}, {2, 5}, {2})  # touching: not this test's
+    assert groups.representatives([2, 5]) == {2: 2, 5: 2}
     groups.observe_apart(set(), {2}, {2})  # the block without a cluster: nothing seen
     assert groups.representatives([2, 5]) == {2: 2, 5: 2}
     groups.observe_apart(set(), {2, 5}, {2})  # the second frame in a row apart
     assert groups.representatives([2, 5]) == {2: 2, 5: 5}
     groups.observe(2, 5, 0.1, moved=4.0)  # for good
+    groups.observe_apart(set(), {2, 5}, {2, 5})
+    assert groups.representatives([2, 5]) == {2: 2, 5: 5}
+
+
+def test_a_group_is_not_joined_across_a_pair_seen_apart_now():
+    """The hand 2 carried the block 5, which agreed with its other face 7; the hand lets
+    go: 5 and 7 stay one group, the hand's apart from both (one pair apart is enough,
+    as for a forbidden pair)."""
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    for a, b in ((2, 5), (2, 7), (5, 7)):
+        groups.observe(a, b, 0.3, moved=4.0)
+    assert set(groups.representatives([2, 5, 7]).values()) == {2}
+    groups.observe_apart({(5, 7)}, {2, 5, 7}, {2})  # 2 moves on; 5, 7 touch and stand
+    assert groups.representatives([2, 5, 7]) == {2: 2, 5: 5, 7: 5}
+
+
+def test_a_pair_apart_is_shown_apart_only_where_one_motion_cannot_explain_both():
+    """Two links of one arm, not touching, the slow one read as standing still: one
+    motion explains both (``differ`` false), so they stay one group at that frame; a
+    second such frame in a row still parts them for good, as before."""
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    for _ in range(4):
+        groups.observe(2, 5, 0.3, moved=4.0)
+    asked = []
+    def one_motion(a, b):
+        asked.append((a, b))
+        return False
+    groups.observe_apart(set(), {2, 5}, {2}, one_motion)
+    assert asked == [(2, 5)]
+    assert groups.representatives([2, 5]) == {2: 2, 5: 2}
+    groups.observe_apart(set(), {2, 5}, {2}, one_motion)
     assert groups.representatives([2, 5]) == {2: 2, 5: 5}
 
 
@@ -289,6 +326,68 @@ def test_a_piece_split_off_a_body_stays_apart_from_what_that_body_is_not(share, 
                      cur, prev, disagree=6.0, first_moved={1: 1, 2: 2, 3: 4})
     assert groups.known(1, 3) == apart
     assert (groups.representatives([1, 3])[3] == 1) != apart
+
+
+@pytest.mark.parametrize("turning, shown_apart", [(False, True), (True, False)])
+def test_a_pair_apart_is_shown_apart_where_one_motion_cannot_explain_both(turning,
+                                                                         shown_apart):
+    """MotionBits 1 and 2 agreed before and no longer touch; now 1 moves and 2 reads as
+    standing still. A block set down (2) beside the hand moving on (1): the affine motion
+    fitted to both explains neither, and they are shown apart at once. Two links of an
+    arm turning about a point inside 2 (so 2 moves under a pixel): one motion explains
+    both, and they stay one group at this frame."""
+    rng = np.random.default_rng(4)
+    h, w = 80, 120
+    prev = cv2.GaussianBlur(rng.uniform(0, 255, (h, w)).astype(np.float32), (3, 3), 0)
+    if turning:  # backward: a turn by -0.05 rad about (85, 40)
+        back = rigid_matrix(-0.05, np.zeros(2))
+        back[:, 2] = np.array([85.0, 40.0]) - back[:, :2] @ np.array([85.0, 40.0])
+    else:  # 1 moved 3 px right, 2 stood still
+        back = np.array([[1.0, 0.0, -3.0], [0.0, 1.0, 0.0]])
+    xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    cur = cv2.remap(prev, (back[0, 0] * xs + back[0, 1] * ys + back[0, 2]).astype(np.float32),
+                    (back[1, 0] * xs + back[1, 1] * ys + back[1, 2]).astype(np.float32),
+                    cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    if not turning:
+        cur[:, 50:] = prev[:, 50:]
+    grid = NodeGrid.build(h, w, 20, 5)
+    labels = np.zeros((h, w), np.int32)
+    labels[20:60, 10:40], labels[25:55, 70:100] = 1, 2
+    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
+    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    back_points = np.where((node_ids == 1)[:, None] | turning,
+                           grid.points @ back[:, :2].T + back[:, 2], grid.points)
+    theta_1 = float(np.arctan2(back[1, 0], back[0, 0]))
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    for _ in range(4):
+        groups.observe(1, 2, 0.3, moved=3.0)
+    observe_touching(groups, grid, labels, node_ids, np.array([1, 2]),
+                     np.array([theta_1, 0.0]), np.array([back[:, 2], [0.0, 0.0]]), {1}, 3,
+                     np.zeros(grid.n, int), node_ids, back_points.astype(np.float32),
+                     np.ones(grid.n), cur, prev, disagree=6.0, first_moved={1: 1, 2: 1})
+    assert not groups.known(1, 2)  # one frame apart: not yet for good
+    assert (groups.representatives([1, 2])[2] == 2) == shown_apart
+
+
+def test_a_pair_apart_whose_member_has_no_pixels_stays_together():
+    """A MotionBit with a cluster but no pixels in the label map (its mask taken by
+    others) tells nothing: its pair is not shown apart, and nothing fails."""
+    rng = np.random.default_rng(5)
+    h, w = 80, 120
+    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
+    cur = np.roll(prev, 3, axis=1)
+    grid = NodeGrid.build(h, w, 20, 5)
+    labels = np.zeros((h, w), np.int32)
+    labels[20:60, 10:40] = 1  # 2 and 3 have no pixels
+    node_ids = np.zeros(grid.n, np.int64)
+    groups = MotionBitGroups(agree=1.5, disagree=6.0)
+    for _ in range(4):
+        groups.observe(1, 3, 0.3, moved=3.0)
+    observe_touching(groups, grid, labels, node_ids, np.array([1, 3]), np.zeros(2),
+                     np.array([[-3.0, 0.0], [0.0, 0.0]]), {1}, 4, np.zeros(grid.n, int),
+                     node_ids, grid.points.copy(), np.ones(grid.n), cur, prev,
+                     disagree=6.0, first_moved={1: 1, 3: 1})
+    assert groups.representatives([1, 3]) == {1: 1, 3: 1}
 
 
 @pytest.mark.parametrize("min_agreeing, joined", [(0.0, True), (0.5, False)])
