@@ -272,6 +272,20 @@ def test_seen_still_remembers_stillness_and_ignores_unreliable_flow():
     assert not out[:5, 6:].any() and (out[5:, 8:] == 3).all() and not out[5:, 6:8].any()
 
 
+def _random_frames(seed: int, shift: int) -> tuple[np.ndarray, np.ndarray, NodeGrid]:
+    """An 80x120 random grey frame, the next one with everything moved ``shift`` px right,
+    and a 20-node grid over them."""
+    prev = np.random.default_rng(seed).uniform(0, 255, (80, 120)).astype(np.float32)
+    return prev, np.roll(prev, shift, axis=1), NodeGrid.build(80, 120, 20, 5)
+
+
+def _node_ids(grid: NodeGrid, labels: np.ndarray) -> np.ndarray:
+    """(n,) int64 the label under each grid node."""
+    h, w = labels.shape
+    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
+    return labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+
+
 @pytest.mark.parametrize("last_still, stood_still", [(6, True), (0, False), (3, False)])
 def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(last_still, stood_still):
     """A MotionBit born next to a moving one with the same motion: a block that stood still
@@ -279,15 +293,10 @@ def test_newborn_is_kept_apart_only_if_it_was_seen_standing_still(last_still, st
     is another body for good; a part of the gripper that moved unlabelled, or that stood
     still only before the gripper first moved (frame 2), is not kept apart (its pair is
     observed and may agree)."""
-    rng = np.random.default_rng(1)
-    h, w = 80, 120
-    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
-    cur = np.roll(prev, 3, axis=1)  # everything moved 3 px right
-    grid = NodeGrid.build(h, w, 20, 5)
-    labels = np.zeros((h, w), np.int32)
+    prev, cur, grid = _random_frames(1, 3)  # everything moved 3 px right
+    labels = np.zeros(prev.shape, np.int32)
     labels[20:60, 20:60], labels[20:60, 60:100] = 1, 2  # 1 = gripper, 2 = newborn
-    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
-    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    node_ids = _node_ids(grid, labels)
     back = grid.points - np.array([3.0, 0.0], np.float32)
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     still_before = np.where(node_ids == 2, last_still, 0)  # 1 + last frame seen still
@@ -306,15 +315,10 @@ def test_a_piece_split_off_a_body_stays_apart_from_what_that_body_is_not(share, 
     drawer that disagrees with the gripper, stood at the last frame: born out of more than
     half 2's pixels, it is a piece of the drawer and stays apart from the gripper however
     well their motions agree; born mostly out of unlabelled pixels, it may join it."""
-    rng = np.random.default_rng(2)
-    h, w = 80, 120
-    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
-    cur = np.roll(prev, 3, axis=1)
-    grid = NodeGrid.build(h, w, 20, 5)
-    labels = np.zeros((h, w), np.int32)
+    prev, cur, grid = _random_frames(2, 3)
+    labels = np.zeros(prev.shape, np.int32)
     labels[20:60, 20:60], labels[20:60, 60:100] = 1, 3
-    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
-    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    node_ids = _node_ids(grid, labels)
     piece = np.flatnonzero(node_ids == 3)
     carried = np.where(node_ids == 1, 1, 0)
     carried[piece[:int(round(share * len(piece)))]] = 2
@@ -353,8 +357,7 @@ def test_a_pair_apart_is_shown_apart_where_one_motion_cannot_explain_both(turnin
     grid = NodeGrid.build(h, w, 20, 5)
     labels = np.zeros((h, w), np.int32)
     labels[20:60, 10:40], labels[25:55, 70:100] = 1, 2
-    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
-    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    node_ids = _node_ids(grid, labels)
     back_points = np.where((node_ids == 1)[:, None] | turning,
                            grid.points @ back[:, :2].T + back[:, 2], grid.points)
     theta_1 = float(np.arctan2(back[1, 0], back[0, 0]))
@@ -372,12 +375,8 @@ def test_a_pair_apart_is_shown_apart_where_one_motion_cannot_explain_both(turnin
 def test_a_pair_apart_whose_member_has_no_pixels_stays_together():
     """A MotionBit with a cluster but no pixels in the label map (its mask taken by
     others) tells nothing: its pair is not shown apart, and nothing fails."""
-    rng = np.random.default_rng(5)
-    h, w = 80, 120
-    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
-    cur = np.roll(prev, 3, axis=1)
-    grid = NodeGrid.build(h, w, 20, 5)
-    labels = np.zeros((h, w), np.int32)
+    prev, cur, grid = _random_frames(5, 3)
+    labels = np.zeros(prev.shape, np.int32)
     labels[20:60, 10:40] = 1  # 2 and 3 have no pixels
     node_ids = np.zeros(grid.n, np.int64)
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
@@ -396,15 +395,10 @@ def test_marks_that_barely_move_agree_only_above_the_motion_floor(min_agreeing, 
     static world's model is off by that much): one motion explains both, so they agree --
     unless agreement needs a union motion of ``min_agreeing`` px (a body at rest and a
     mark spilled on the table beside it are not one body for standing still together)."""
-    rng = np.random.default_rng(3)
-    h, w = 80, 120
-    prev = rng.uniform(0, 255, (h, w)).astype(np.float32)
-    cur = prev.copy()
-    grid = NodeGrid.build(h, w, 20, 5)
-    labels = np.zeros((h, w), np.int32)
+    prev, cur, grid = _random_frames(3, 0)
+    labels = np.zeros(prev.shape, np.int32)
     labels[20:60, 20:60], labels[20:60, 60:100] = 1, 2
-    nx = np.clip(np.round(grid.points).astype(int), 0, [w - 1, h - 1])
-    node_ids = labels[nx[:, 1], nx[:, 0]].astype(np.int64)
+    node_ids = _node_ids(grid, labels)
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     observe_touching(groups, grid, labels, node_ids, np.array([1, 2]), np.zeros(2),
                      np.array([[-0.2, 0.0], [-0.2, 0.0]]), set(), 3, np.zeros(grid.n, int),
