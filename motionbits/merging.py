@@ -380,11 +380,11 @@ class MotionBitGroups:
                 self._apart.pop(key, None)
                 continue
             self._apart[key] = self._apart.get(key, 0) + 1
-            if differ is None or differ(a, b):
-                self._apart_now.add(key)
             if self._apart[key] >= DISAGREE_FRAMES:
                 del self._apart[key]
-                self.forbid(a, [b])
+                self.forbid(a, [b])  # (which parts them at this frame too)
+            elif differ is None or differ(a, b):
+                self._apart_now.add(key)
 
     def representatives(self, ids) -> dict[int, int]:
         """id -> the oldest (smallest) id of its group, for ``ids`` present now. Groups
@@ -511,12 +511,17 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
     boxes = cache(lambda: label_boxes(labels))  # once, if a pair asks
     touching = touching_pairs(labels, reach=reach)
 
+    def pair_excess(a: int, b: int) -> tuple[float, np.ndarray]:
+        """:func:`union_excess` of the affine motion fitted to both, and their nodes."""
+        sel = (node_ids == a) | (node_ids == b)
+        union = fit_affine(grid.points[sel], back_points[sel], reliability[sel])
+        return union_excess(labels, a, b, boxes(), own.get(a, STILL), own.get(b, STILL),
+                            union, cur, prev), sel
+
     def differ(a: int, b: int) -> bool:  # one motion cannot explain both
         if any(x > len(boxes()) or boxes()[x - 1] is None for x in (a, b)):
             return False  # a cluster without pixels: nothing to tell
-        sel = (node_ids == a) | (node_ids == b)
-        union = fit_affine(grid.points[sel], back_points[sel], reliability[sel])
-        return union_excess(labels, a, b, boxes(), own[a], own[b], union, cur, prev) > disagree
+        return pair_excess(a, b)[0] > disagree
 
     groups.observe_apart(touching, set(own), moving, differ)
     for a, b in touching:
@@ -531,10 +536,7 @@ def observe_touching(groups: MotionBitGroups, grid: NodeGrid, labels: np.ndarray
                     groups.doubt(x, y)
         if groups.known(a, b) or (a not in own and b not in own):
             continue
-        sel = (node_ids == a) | (node_ids == b)
-        union = fit_affine(grid.points[sel], back_points[sel], reliability[sel])
-        excess = union_excess(labels, a, b, boxes(), own.get(a, STILL), own.get(b, STILL),
-                              union, cur, prev)
+        excess, sel = pair_excess(a, b)
         moved = float(np.hypot(*(back_points[sel] - grid.points[sel]).T).mean())
         if (a in own and b in own and moved >= min_agreeing) or excess > disagree:
             groups.observe(a, b, excess, moved)
