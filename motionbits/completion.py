@@ -48,7 +48,12 @@ are in the body's model and the cut keeps it (round 50).
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
 on the mark's exact outline, and a block at rest was completed at one frame and not at
-the next.
+the next. Under a moving camera the cuts are carried along the static world's model
+(:meth:`CutMemory.follow`); a mark at rest still lying on the body carried to it, under
+an image that matches the carried one within a pixel, is cut anew with that body on the
+body's side of the cut from the start (a carried body drifts a little from frame to frame;
+the cut follows the image's edges), and takes the carried body, less the table under a
+shadow now, where the new cut finds nothing (round 53).
 
 Measured in docs/results.md, "Completing marks by colour" (rounds 20 to 22).
 """
@@ -130,6 +135,16 @@ RECALL_IOU = 0.8
 #: grey levels (any channel) since.
 RECALL_CHANGED = 0.05
 RECALL_LEVEL = 12
+#: Under a moving camera a cut is carried along the static world's model
+#: (:meth:`CutMemory.follow`), into a box grown by this many px; it is recalled while at
+#: least ``FOLLOW_INSIDE`` of the mark lies within one px of the body carried, the mark
+#: covers at least ``FOLLOW_AREA`` of the area it had, and the image matches the carried
+#: one within one px (the model's error) as ``RECALL_CHANGED`` asks. Round 53: a block's
+#: mark completed at one frame and not at the next, where the camera had moved
+#: (docs/results.md, "Cuts carried by the camera's model").
+FOLLOW_MARGIN = 2
+FOLLOW_INSIDE = 0.9
+FOLLOW_AREA = 0.5
 #: A mark stands as first seen (:meth:`FirstLook.as_first_seen`) when the first look
 #: knows at least this share of its pixels ...
 FIRST_SEEN_KNOWN = 0.3
@@ -216,9 +231,11 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             continue
         cut = None if memory is None or label in moving else memory.recall(label_map, label,
                                                                              box, rgb)
-        if cut is None:
+        if cut is None or cut.followed:
+            carried = None if cut is None else _unshadowed(cut, label_map, label, rgb,
+                                                           first_look)
             cut = _cut(label_map, label, box, rgb, out, first_look, trim=label not in moving,
-                       shadow=shadow)
+                       shadow=shadow, prior=carried) or carried
         if cut is None:
             continue
         if label not in moving:
@@ -296,29 +313,32 @@ def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndar
 class _Cut:
     """The body GrabCut found for a mask: its pixels ``body`` (h, w) bool within the box
     (``rows``, ``cols``), the mask's (less those a trim took) and those the cut added,
-    from the mask (h, w) bool on the (h, w, 3) uint8 image ``rgb`` of that box."""
+    from the mask (h, w) bool on the (h, w, 3) uint8 image ``rgb`` of that box;
+    ``followed`` once carried by a moving camera's model (:meth:`CutMemory.follow`)."""
     rows: slice
     cols: slice
     mask: np.ndarray
     rgb: np.ndarray
     body: np.ndarray
+    followed: bool = False
 
 
 def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.ndarray,
          out: np.ndarray, first_look: FirstLook | None = None, trim: bool = False,
-         shadow: np.ndarray | None = None) -> _Cut | None:
+         shadow: np.ndarray | None = None, prior: _Cut | None = None) -> _Cut | None:
     """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
     around it, where no mask of ``out`` is yet -- starting on the body's side, with the
     mask, from what looks otherwise than ``first_look`` saw there -- less, if ``trim``,
     the mask's pixels it gives to the background (``TRIM_SHARE``) and those under a cast
     ``shadow`` ((H, W) bool or None); None where it changes nothing. A cut that runs out
     to its box's frame is tried once more in a box ``WIDER`` times as far out: a top
-    face's mark may be a small part of its body."""
+    face's mark may be a small part of its body. A ``prior`` cut (one carried along a
+    moving camera's model) puts its body on the body's side too."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
     for share in (COMPLETION_REACH, WIDER * COMPLETION_REACH):
         cut, ran_out = _cut_within(label_map, label, grow_box(
             box, int(share * side) + COMPLETION_MARGIN, label_map.shape), rgb, out, first_look,
-            trim, shadow)
+            trim, shadow, prior)
         if not ran_out:
             return cut
     return None
@@ -326,8 +346,8 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
 
 def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
                 rgb: np.ndarray, out: np.ndarray, first_look: FirstLook | None,
-                trim: bool = False, shadow: np.ndarray | None = None
-                ) -> tuple[_Cut | None, bool]:
+                trim: bool = False, shadow: np.ndarray | None = None,
+                prior: _Cut | None = None) -> tuple[_Cut | None, bool]:
     """:func:`_cut` in the image box ``around``: (the cut or None, whether it ran out to
     the box's frame)."""
     rows, cols = around
@@ -341,6 +361,8 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
         relit = first_look.relit(rgb, (rows, cols), first_look.known[rows, cols])
         trimap[first_look.changed(rgb, (rows, cols), relit) & (trimap == cv2.GC_PR_BGD)
                & free] = cv2.GC_PR_FGD
+    if prior is not None:  # the body carried here starts on the body's side too
+        trimap[_body_in(prior, around) & (trimap == cv2.GC_PR_BGD) & free] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
@@ -371,6 +393,36 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     if _reaches_frame(new):
         return None, True
     return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept | new), False
+
+
+def _body_in(cut: _Cut, box: tuple[slice, slice]) -> np.ndarray:
+    """(h, w) bool: ``cut``'s body on the image box ``box`` (False outside the cut's box)."""
+    out = np.zeros((box[0].stop - box[0].start, box[1].stop - box[1].start), bool)
+    r0, r1 = max(box[0].start, cut.rows.start), min(box[0].stop, cut.rows.stop)
+    c0, c1 = max(box[1].start, cut.cols.start), min(box[1].stop, cut.cols.stop)
+    if r1 > r0 and c1 > c0:
+        out[r0 - box[0].start:r1 - box[0].start, c0 - box[1].start:c1 - box[1].start] = cut.body[
+            r0 - cut.rows.start:r1 - cut.rows.start, c0 - cut.cols.start:c1 - cut.cols.start]
+    return out
+
+
+def _unshadowed(cut: _Cut, label_map: np.ndarray, label: int, rgb: np.ndarray,
+                first_look: FirstLook | None) -> _Cut:
+    """A carried ``cut`` less the pixels it adds to the mark ``label`` of ``label_map``
+    that show the table under a shadow in the (H, W, 3) uint8 frame ``rgb`` now, as
+    :func:`_cut_within` leaves them out (by the colours around them and, given
+    ``first_look``, by the scene first seen there)."""
+    rows, cols = cut.rows, cut.cols
+    added = cut.body & (label_map[rows, cols] != label)
+    if not added.any():
+        return cut
+    drop = _shadowed(rgb[rows, cols], ~cut.body)
+    if first_look is not None:
+        drop |= first_look.relit(rgb, (rows, cols), first_look.known[rows, cols])
+    drop &= added
+    if not drop.any():
+        return cut
+    return _Cut(rows, cols, cut.mask, cut.rgb, cut.body & ~drop, followed=True)
 
 
 def _without_shadow(kept: np.ndarray, shadow: np.ndarray) -> np.ndarray:
@@ -404,7 +456,10 @@ class CutMemory:
     found for its mark is used again while the mark overlaps the one it was found for by
     ``RECALL_IOU`` and at most ``RECALL_CHANGED`` of the body's pixels changed by more
     than ``RECALL_LEVEL`` grey levels (a hand passing in front, the camera moving) -- and
-    spares the cut's milliseconds.
+    spares the cut's milliseconds. Under a moving camera, :meth:`follow` carries the cuts
+    along the static world's model; such a cut is recalled on looser tests (``FOLLOW_*``)
+    and seeds a new cut (:func:`complete_masks`), which it stands in for only where that
+    cut finds nothing.
     """
 
     def __init__(self) -> None:
@@ -418,13 +473,54 @@ class CutMemory:
         if cut is None or not _inside(box, (cut.rows, cut.cols)):
             return None
         mask = label_map[cut.rows, cut.cols] == label
-        union = np.count_nonzero(mask | cut.mask)
-        if np.count_nonzero(mask & cut.mask) < RECALL_IOU * union:
-            return None
-        change = cv2.absdiff(rgb[cut.rows, cut.cols], cut.rgb).max(axis=2)[cut.body]
+        now = rgb[cut.rows, cut.cols]
+        if cut.followed:  # the mark still lies on the body carried here, which looks as it
+            ring = np.ones((3, 3), np.uint8)  # did within one px
+            near = cv2.dilate(cut.body.view(np.uint8), ring) > 0
+            area = np.count_nonzero(mask)
+            if (np.count_nonzero(mask & near) < FOLLOW_INSIDE * area
+                    or area < FOLLOW_AREA * np.count_nonzero(cut.mask)):
+                return None
+            change = cv2.max(cv2.subtract(cv2.erode(cut.rgb, ring), now),
+                             cv2.subtract(now, cv2.dilate(cut.rgb, ring))).max(axis=2)
+        else:
+            if np.count_nonzero(mask & cut.mask) < RECALL_IOU * np.count_nonzero(mask | cut.mask):
+                return None
+            change = cv2.absdiff(now, cut.rgb).max(axis=2)
+        change = change[cut.body]
         if np.count_nonzero(change > RECALL_LEVEL) > RECALL_CHANGED * change.size:
             return None
         return cut
+
+    def follow(self, world: np.ndarray) -> None:
+        """Carry the cuts to the current frame of a moving camera along the static world's
+        model (``world``: (H, W, 2) float32, :func:`motionbits.camera.world_maps`): a body
+        at rest moves with the static world. Each cut's box moves by its pixels' median
+        motion (grown by ``FOLLOW_MARGIN`` px, clipped to the frame); its masks are carried
+        to the nearest pixel, its image bilinearly. A cut carried off the frame is
+        forgotten."""
+        h, w = world.shape[:2]
+        carried = {}
+        for label, cut in self._cuts.items():
+            y0, x0 = cut.rows.start, cut.cols.start
+            ys, xs = np.mgrid[cut.rows, cut.cols]
+            came = world[cut.rows, cut.cols]
+            dy = int(round(float(np.median(ys - came[..., 1]))))
+            dx = int(round(float(np.median(xs - came[..., 0]))))
+            m = FOLLOW_MARGIN
+            rows = slice(max(y0 + dy - m, 0), min(cut.rows.stop + dy + m, h))
+            cols = slice(max(x0 + dx - m, 0), min(cut.cols.stop + dx + m, w))
+            if rows.stop - rows.start < 2 or cols.stop - cols.start < 2:
+                continue
+            at = world[rows, cols] - np.array([x0, y0], np.float32)  # in the old box
+            body, mask = (cv2.remap(a.view(np.uint8), at, None, cv2.INTER_NEAREST,
+                                    borderMode=cv2.BORDER_CONSTANT, borderValue=0) > 0
+                          for a in (cut.body, cut.mask))
+            if body.any():
+                carried[label] = _Cut(rows, cols, mask, cv2.remap(
+                    cut.rgb, at, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE),
+                    body, followed=True)
+        self._cuts = carried
 
     def keep(self, cuts: dict[int, _Cut]) -> None:
         """Remember these cuts (label -> cut) instead of the last frame's."""

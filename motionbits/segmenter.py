@@ -470,6 +470,7 @@ class MotionBitsSegmenter:
             if world is not None:
                 self._arrivals.follow(world)
                 self._first_look.follow(world)
+                self._cuts.follow(world)
                 self._rest_marks.follow(world)
             labels, held, born, self._next_id = self._arrivals.place(
                 labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving,

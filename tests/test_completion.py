@@ -219,6 +219,109 @@ def test_a_cut_found_for_a_mark_at_rest_is_used_again_until_the_image_changes(mo
     assert len(calls) == 3
 
 
+def _moved_by(image: np.ndarray, dx: int, dy: int) -> np.ndarray:
+    """``image`` as a camera that moved shows it: every pixel (dx, dy) px further on
+    (what comes into view repeats the edge)."""
+    m = np.float32([[1, 0, dx], [0, 1, dy]])
+    inter = cv2.INTER_NEAREST
+    return cv2.warpAffine(image, m, image.shape[1::-1], flags=inter,
+                          borderMode=cv2.BORDER_REPLICATE)
+
+
+def _world(dx: int, dy: int) -> np.ndarray:
+    """(240, 320, 2) float32: where each pixel's static world was before a camera move
+    that carried the image (dx, dy) px further on."""
+    ys, xs = np.mgrid[0:240, 0:320].astype(np.float32)
+    return np.stack([xs - dx, ys - dy], -1)
+
+
+def test_a_cut_under_a_moving_camera_is_carried_along_the_static_world(monkeypatch):
+    """The camera moves (5, 3) px; the block at rest moves with the table. Where the new
+    cut finds nothing, the old cut, carried along the static world's model, completes the
+    mark; where it finds the block, it is used; a cut whose image changed (a hand over the
+    block) is not recalled, nor one carried off the frame."""
+    import motionbits.completion as completion
+
+    rgb, body, labels = _scene()
+    memory = completion.CutMemory()
+    assert (complete_masks(labels, rgb, memory=memory)[body] == 3).mean() > 0.97
+    moved_rgb, moved_body = _moved_by(rgb, 5, 3), _moved_by(body.view(np.uint8), 5, 3) > 0
+    moved = _moved_by(labels, 5, 3)
+    moved[moved_body & ~np.roll(moved_body, -6, axis=0)] = 0  # the mark 6 rows shorter
+    memory.follow(_world(5, 3))
+
+    grab_cut = completion._grab_cut
+    monkeypatch.setattr(completion, "_grab_cut", lambda *a: None)  # the new cut fails
+    carried = complete_masks(moved, moved_rgb, memory=memory)
+    assert (carried[moved_body] == 3).mean() > 0.97
+    assert not ((carried == 3) & ~moved_body).any()
+    without = complete_masks(moved, moved_rgb, memory=completion.CutMemory())
+    assert (without[moved_body] == 3).mean() < 0.5  # (what the mark alone covers)
+
+    monkeypatch.setattr(completion, "_grab_cut", grab_cut)  # the new cut finds the block
+    found = complete_masks(moved, moved_rgb, memory=memory)
+    assert (found[moved_body] == 3).mean() > 0.97
+
+    memory.follow(_world(0, 0))
+    monkeypatch.setattr(completion, "_grab_cut", lambda *a: None)
+    covered = moved_rgb.copy()
+    covered[83:113, 125:185] = (230, 200, 170)  # a hand over the block's top half
+    assert np.array_equal(complete_masks(moved, covered, memory=memory), moved)
+
+    for shift, recalled in (((0, 0), True), ((400, 0), False)):  # off the frame: forgotten
+        monkeypatch.setattr(completion, "_grab_cut", grab_cut)
+        memory = completion.CutMemory()
+        complete_masks(labels, rgb, memory=memory)
+        memory.follow(_world(*shift))
+        monkeypatch.setattr(completion, "_grab_cut", lambda *a: None)
+        out = complete_masks(labels, rgb, memory=memory)
+        assert ((out[body] == 3).mean() > 0.97) == recalled
+
+
+def test_a_carried_cut_puts_the_body_it_found_on_the_body_s_side_of_the_new_cut():
+    """A block's red top is marked, its purple side is not: from the mark alone the new cut
+    gives the side to the table. A cut carried along the camera's model that found the
+    side, drifted 3 px off the block, starts it on the body's side, and the new cut takes
+    it -- not the table the drift put in the carried body."""
+    import motionbits.completion as completion
+
+    rgb = _table()
+    top = np.zeros((240, 320), bool)
+    top[80:116, 120:180] = True
+    side = np.zeros_like(top)
+    side[116:140, 120:180] = True
+    rgb[top] = (200, 40, 40)
+    rgb[side] = (90, 30, 110)
+    labels = np.where(top, 3, 0).astype(np.int32)
+    assert (complete_masks(labels, rgb)[side] == 3).mean() < 0.5
+    memory = completion.CutMemory()
+    box = (slice(60, 160), slice(100, 200))
+    drifted = np.roll(top | side, 3, axis=1)
+    memory.keep({3: completion._Cut(*box, top[box], rgb[box].copy(), drifted[box])})
+    memory.follow(_world(0, 0))
+    out = complete_masks(labels, rgb, memory=memory)
+    assert (out[side] == 3).mean() > 0.95
+    assert (out[~(top | side)] == 0).all()
+
+
+def test_a_carried_cut_does_not_add_the_table_under_a_shadow():
+    """A carried cut that took a block's cast shadow along (the smooth table below it,
+    dimmed) gives most of those pixels back; the block's own pixels it adds stay."""
+    from motionbits.completion import _Cut, _unshadowed
+
+    rgb, body, labels = _scene()
+    table = cv2.GaussianBlur(_table(), (0, 0), 4)
+    rgb[~body] = table[~body]
+    strip = np.zeros_like(body)
+    strip[140:160, 110:190] = True
+    rgb[strip] = (table[strip] * 0.5).astype(np.uint8)
+    box = (slice(60, 180), slice(100, 200))
+    cut = _Cut(*box, labels[box] == 3, rgb[box].copy(), (body | strip)[box], followed=True)
+    kept = _unshadowed(cut, labels, 3, rgb, None).body
+    assert (kept & strip[box]).sum() < 0.25 * strip.sum()
+    assert kept[body[box]].all()
+
+
 def test_the_faces_that_differ_from_the_scene_first_seen_join_the_body_and_shadows_do_not():
     """A block's red top is marked; its purple side face is not, nor is its shadow. From
     the mark alone the side's colour goes to the background's model; with the table as
