@@ -49,11 +49,12 @@ Within a stream, a mark at rest takes the cut found for it at the last frame aga
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
 on the mark's exact outline, and a block at rest was completed at one frame and not at
 the next. Under a moving camera the cuts are carried along the static world's model
-(:meth:`CutMemory.follow`); a mark at rest still lying on the body carried to it, under
-an image that matches the carried one within a pixel, is cut anew with that body on the
-body's side of the cut from the start (a carried body drifts a little from frame to frame;
-the cut follows the image's edges), and takes the carried body, less the table under a
-shadow now, where the new cut finds nothing (round 53).
+(:meth:`CutMemory.follow`). A mark at rest still lying on the body carried to it, under
+an image that matches the carried one within a pixel, is cut anew; where that cut finds
+less than ``FOLLOW_LARGER`` of the carried body, it is cut once more with that body on
+the body's side from the start (a carried body drifts a little from frame to frame; the
+cut follows the image's edges), and takes the carried body, less the table under a
+shadow now, where that cut finds nothing (round 53).
 
 Measured in docs/results.md, "Completing marks by colour" (rounds 20 to 22).
 """
@@ -139,12 +140,15 @@ RECALL_LEVEL = 12
 #: (:meth:`CutMemory.follow`), into a box grown by this many px; it is recalled while at
 #: least ``FOLLOW_INSIDE`` of the mark lies within one px of the body carried, the mark
 #: covers at least ``FOLLOW_AREA`` of the area it had, and the image matches the carried
-#: one within one px (the model's error) as ``RECALL_CHANGED`` asks. Round 53: a block's
-#: mark completed at one frame and not at the next, where the camera had moved
-#: (docs/results.md, "Cuts carried by the camera's model").
+#: one within one px (the model's error) as ``RECALL_CHANGED`` asks. Where the new cut
+#: finds less than ``FOLLOW_LARGER`` of the body carried, the cut is made again with that
+#: body on the body's side. Round 53: a block's mark completed at one frame and not at
+#: the next, where the camera had moved (docs/results.md, "Cuts carried by the camera's
+#: model").
 FOLLOW_MARGIN = 2
 FOLLOW_INSIDE = 0.9
 FOLLOW_AREA = 0.5
+FOLLOW_LARGER = 0.85
 #: A mark stands as first seen (:meth:`FirstLook.as_first_seen`) when the first look
 #: knows at least this share of its pixels ...
 FIRST_SEEN_KNOWN = 0.3
@@ -235,7 +239,11 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             carried = None if cut is None else _unshadowed(cut, label_map, label, rgb,
                                                            first_look)
             cut = _cut(label_map, label, box, rgb, out, first_look, trim=label not in moving,
-                       shadow=shadow, prior=carried) or carried
+                       shadow=shadow)
+            if carried is not None and (cut is None or np.count_nonzero(cut.body)
+                                        < FOLLOW_LARGER * np.count_nonzero(carried.body)):
+                cut = _cut(label_map, label, box, rgb, out, first_look,
+                           trim=label not in moving, shadow=shadow, prior=carried) or carried
         if cut is None:
             continue
         if label not in moving:
@@ -458,8 +466,8 @@ class CutMemory:
     than ``RECALL_LEVEL`` grey levels (a hand passing in front, the camera moving) -- and
     spares the cut's milliseconds. Under a moving camera, :meth:`follow` carries the cuts
     along the static world's model; such a cut is recalled on looser tests (``FOLLOW_*``)
-    and seeds a new cut (:func:`complete_masks`), which it stands in for only where that
-    cut finds nothing.
+    and, where a new cut finds less of its body, seeds another (:func:`complete_masks`),
+    which it stands in for only where that one finds nothing.
     """
 
     def __init__(self) -> None:

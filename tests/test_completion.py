@@ -281,8 +281,8 @@ def test_a_cut_under_a_moving_camera_is_carried_along_the_static_world(monkeypat
 def test_a_carried_cut_puts_the_body_it_found_on_the_body_s_side_of_the_new_cut():
     """A block's red top is marked, its purple side is not: from the mark alone the new cut
     gives the side to the table. A cut carried along the camera's model that found the
-    side, drifted 3 px off the block, starts it on the body's side, and the new cut takes
-    it -- not the table the drift put in the carried body."""
+    side, drifted 3 px off the block, is larger: the cut is made again with the carried
+    body on the body's side, and takes the side -- not the table the drift put in it."""
     import motionbits.completion as completion
 
     rgb = _table()
