@@ -222,10 +222,8 @@ def test_a_cut_found_for_a_mark_at_rest_is_used_again_until_the_image_changes(mo
 def _moved_by(image: np.ndarray, dx: int, dy: int) -> np.ndarray:
     """``image`` as a camera that moved shows it: every pixel (dx, dy) px further on
     (what comes into view repeats the edge)."""
-    m = np.float32([[1, 0, dx], [0, 1, dy]])
-    inter = cv2.INTER_NEAREST
-    return cv2.warpAffine(image, m, image.shape[1::-1], flags=inter,
-                          borderMode=cv2.BORDER_REPLICATE)
+    return cv2.warpAffine(image, np.float32([[1, 0, dx], [0, 1, dy]]), image.shape[1::-1],
+                          flags=cv2.INTER_NEAREST, borderMode=cv2.BORDER_REPLICATE)
 
 
 def _world(dx: int, dy: int) -> np.ndarray:
