@@ -70,6 +70,7 @@ import numpy as np
 from motionbits.arrivals import SURROUND_DIFFERENCE, surroundings_colour
 from motionbits.boxes import (at_border, grow_box, label_areas, label_boxes, nonzero_box,
                               pieces_holding)
+from motionbits.flow import pixel_grid
 from motionbits.masks import EDGELESS_GRADIENT, drop_labels, outline_gradient
 from motionbits.revealed import (SHADOW_CHROMA, SHADOW_GAIN, SHADOW_WINDOW, WINDOW,
                                  _color_difference, brightness, follow_known, follow_look,
@@ -370,7 +371,8 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
         trimap[first_look.changed(rgb, (rows, cols), relit) & (trimap == cv2.GC_PR_BGD)
                & free] = cv2.GC_PR_FGD
     if prior is not None:  # the body carried here starts on the body's side too
-        trimap[_body_in(prior, around) & (trimap == cv2.GC_PR_BGD) & free] = cv2.GC_PR_FGD
+        trimap[_in_box(prior.body, (prior.rows, prior.cols), around)
+               & (trimap == cv2.GC_PR_BGD) & free] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
@@ -403,14 +405,16 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept | new), False
 
 
-def _body_in(cut: _Cut, box: tuple[slice, slice]) -> np.ndarray:
-    """(h, w) bool: ``cut``'s body on the image box ``box`` (False outside the cut's box)."""
+def _in_box(mask: np.ndarray, at: tuple[slice, slice], box: tuple[slice, slice]
+            ) -> np.ndarray:
+    """(h, w) bool: the bool ``mask`` on the image box ``at`` seen on the image box ``box``
+    (False outside ``at``)."""
     out = np.zeros((box[0].stop - box[0].start, box[1].stop - box[1].start), bool)
-    r0, r1 = max(box[0].start, cut.rows.start), min(box[0].stop, cut.rows.stop)
-    c0, c1 = max(box[1].start, cut.cols.start), min(box[1].stop, cut.cols.stop)
+    r0, r1 = max(box[0].start, at[0].start), min(box[0].stop, at[0].stop)
+    c0, c1 = max(box[1].start, at[1].start), min(box[1].stop, at[1].stop)
     if r1 > r0 and c1 > c0:
-        out[r0 - box[0].start:r1 - box[0].start, c0 - box[1].start:c1 - box[1].start] = cut.body[
-            r0 - cut.rows.start:r1 - cut.rows.start, c0 - cut.cols.start:c1 - cut.cols.start]
+        out[r0 - box[0].start:r1 - box[0].start, c0 - box[1].start:c1 - box[1].start] = mask[
+            r0 - at[0].start:r1 - at[0].start, c0 - at[1].start:c1 - at[1].start]
     return out
 
 
@@ -508,13 +512,13 @@ class CutMemory:
         to the nearest pixel, its image bilinearly. A cut carried off the frame is
         forgotten."""
         h, w = world.shape[:2]
+        xs, ys = pixel_grid(h, w)
         carried = {}
         for label, cut in self._cuts.items():
             y0, x0 = cut.rows.start, cut.cols.start
-            ys, xs = np.mgrid[cut.rows, cut.cols]
             came = world[cut.rows, cut.cols]
-            dy = int(round(float(np.median(ys - came[..., 1]))))
-            dx = int(round(float(np.median(xs - came[..., 0]))))
+            dy = int(round(float(np.median(ys[cut.rows, cut.cols] - came[..., 1]))))
+            dx = int(round(float(np.median(xs[cut.rows, cut.cols] - came[..., 0]))))
             m = FOLLOW_MARGIN
             rows = slice(max(y0 + dy - m, 0), min(cut.rows.stop + dy + m, h))
             cols = slice(max(x0 + dx - m, 0), min(cut.cols.stop + dx + m, w))
@@ -727,13 +731,11 @@ def _iou(a: tuple[tuple[slice, slice], np.ndarray],
     """Intersection over union of two masks, each as (image box, bool mask in it)."""
     (ra, ca), ma = a
     (rb, cb), mb = b
-    y0, x0 = min(ra.start, rb.start), min(ca.start, cb.start)
-    y1, x1 = max(ra.stop, rb.stop), max(ca.stop, cb.stop)
-    both = np.zeros((2, y1 - y0, x1 - x0), bool)
-    both[0, ra.start - y0:ra.stop - y0, ca.start - x0:ca.stop - x0] = ma
-    both[1, rb.start - y0:rb.stop - y0, cb.start - x0:cb.stop - x0] = mb
-    union = np.count_nonzero(both[0] | both[1])
-    return np.count_nonzero(both[0] & both[1]) / union if union else 0.0
+    box = (slice(min(ra.start, rb.start), max(ra.stop, rb.stop)),
+           slice(min(ca.start, cb.start), max(ca.stop, cb.stop)))
+    first, second = _in_box(ma, (ra, ca), box), _in_box(mb, (rb, cb), box)
+    union = np.count_nonzero(first | second)
+    return np.count_nonzero(first & second) / union if union else 0.0
 
 
 def _inside(box: tuple[slice, slice], outer: tuple[slice, slice]) -> bool:
