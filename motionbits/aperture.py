@@ -27,6 +27,8 @@ fed back into the clustering came back as a MotionBit of its own and split the b
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import cv2
 import numpy as np
 
@@ -34,7 +36,8 @@ from motionbits.boxes import label_boxes, run_counts
 from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
-__all__ = ["flat_regions", "half_colour_gradient", "join_flat_regions", "carried_joins",
+__all__ = ["FlatLinks", "flat_link_candidates", "flat_regions", "half_colour_gradient",
+           "join_flat_links", "join_flat_regions", "carried_joins",
            "reaches_border", "ground_regions", "FLAT_GRADIENT", "MOVING_SHARE",
            "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE", "GROUND_SHARE"]
 
@@ -126,20 +129,30 @@ def flat_regions(rgb: np.ndarray, max_gradient: float = FLAT_GRADIENT,
     return regions > 0, regions, stats
 
 
-def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
-                      trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
-                      prev_gray: np.ndarray, still: np.ndarray, speed: np.ndarray,
-                      joined: np.ndarray, *, move_threshold: float, min_area: int,
-                      half_gradient: np.ndarray | None = None) -> np.ndarray:
-    """The label map with flat links that move along themselves joined to their MotionBit.
+class FlatLinks(NamedTuple):
+    """The flat regions next to MotionBits that :func:`join_flat_links` tests
+    (:func:`flat_link_candidates`)."""
+
+    #: (H, W) bool flat pixels and (H, W) int32 flat region of each pixel (0 = not flat)
+    flat: np.ndarray
+    regions: np.ndarray
+    #: (n, 5) ``cv2.connectedComponentsWithStats`` stats of each region (full-resolution px)
+    stats: np.ndarray
+    #: (MotionBit index into ``ids``, region, joined at the last frame) of each test
+    pairs: list[tuple[int, int, bool]]
+
+
+def flat_link_candidates(labels: np.ndarray, ids: np.ndarray, rgb: np.ndarray,
+                         speed: np.ndarray, joined: np.ndarray, *, move_threshold: float,
+                         min_area: int, half_gradient: np.ndarray | None = None
+                         ) -> FlatLinks | None:
+    """The flat regions that may join a MotionBit: those touching its mask that moved with
+    it and reach the border, or that it joined at the last frame (no motion needed).
 
     Args:
         labels: (H, W) int32 label map (0 = background).
-        ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,), ``trans``
-            (K, 2) (current -> previous, relative to the camera).
+        ids: (K,) ids with a cluster now.
         rgb: (H, W, 3) uint8 current frame.
-        cur_gray, prev_gray: (H, W) float32 grey frames (``prev_gray`` camera-stabilised).
-        still: (H, W) float32 grey levels by which "nothing moved" misses each pixel.
         speed: (H, W) float32 length of the backward flow relative to the camera.
         joined: (H, W) int32 pixels joined at the last frame, carried to this one, under
             their group's id (:func:`carried_joins`): a region stays joined to that id.
@@ -148,19 +161,16 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
         half_gradient: ``half_colour_gradient(rgb)`` if already computed.
 
     Returns:
-        (H, W) int32 label map: ``labels`` plus the joined regions (only background
-        pixels change).
+        The regions and the (MotionBit, region) pairs to test, or None where there is none.
     """
     if not len(ids):
-        return labels
+        return None
     flat, regions, stats = flat_regions(rgb, half_gradient=half_gradient)
     n = len(stats)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     moving = speed > move_threshold
     moving_share = run_counts(regions[moving], n) / area
     free = run_counts(regions[labels == 0], n) / area >= 0.5
-    h, w = labels.shape
-    x, y, bw, bh = (stats[:, i] for i in range(4))  # each region's box
     border = reaches_border(stats, labels.shape)
     # the ground or a wall is no link
     eligible = (area >= min_area) & free & ~ground_regions(stats, labels.shape)
@@ -168,14 +178,13 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     new = eligible & border & (moving_share >= MOVING_SHARE)
     was = joined > 0
     if not (new.any() or (was.any() and eligible.any())):
-        return labels
-    out = labels.copy()
-    band_kernel = np.ones((2 * BAND + 1, 2 * BAND + 1), np.uint8)
+        return None
+    h, w = labels.shape
     reach = np.ones((2 * REACH + 1, 2 * REACH + 1), np.uint8)
-    static = None
     boxes = label_boxes(labels)
     was_id, was_region = joined[was], regions[was]  # pixels joined at the last frame
-    for lab, th, t in zip(ids, thetas, trans):
+    pairs = []
+    for k, lab in enumerate(ids.tolist()):
         if lab > len(boxes) or boxes[lab - 1] is None:
             continue
         rows, cols = boxes[lab - 1]  # the mask's box, grown by the reach
@@ -184,21 +193,75 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
         mask = (labels[near_box] == lab).astype(np.uint8)
         near = np.unique(regions[near_box][(cv2.dilate(mask, reach) > 0) & (mask == 0)])
         kept = np.bincount(was_region[was_id == lab], minlength=n) / area >= KEPT_SHARE
-        for c in near[np.where(kept[near], eligible[near], new[near])]:
-            if static is None:
-                static = cv2.blur(still, (3, 3))
-            box = (slice(max(y[c] - BAND, 0), min(y[c] + bh[c] + BAND, h)),
-                   slice(max(x[c] - BAND, 0), min(x[c] + bw[c] + BAND, w)))
-            region = regions[box] == c
-            band = cv2.dilate(region.astype(np.uint8), band_kernel) > 0
-            moved = photometric_residual(cur_gray, prev_gray, rigid_matrix(th, t), box)[band].mean()
-            nothing = static[box][band].mean()
-            if (moved <= nothing + KEEP_TOLERANCE if kept[c]
-                    else nothing < STILL_LEVELS and moved <= nothing - GAIN):
-                grown = cv2.dilate(region.astype(np.uint8), reach) > 0  # with its edge pixels
-                sub = out[box]
-                sub[grown & (sub == 0) & (region | ~flat[box])] = lab
+        pairs += [(k, int(c), bool(kept[c]))
+                  for c in near[np.where(kept[near], eligible[near], new[near])]]
+    return FlatLinks(flat, regions, stats, pairs) if pairs else None
+
+
+def join_flat_links(labels: np.ndarray, links: FlatLinks | None, ids: np.ndarray,
+                    thetas: np.ndarray, trans: np.ndarray, cur_gray: np.ndarray,
+                    prev_gray: np.ndarray, still: np.ndarray) -> np.ndarray:
+    """The label map with the candidate flat ``links`` (:func:`flat_link_candidates`)
+    that the MotionBit's motion explains joined to it.
+
+    Args:
+        labels: (H, W) int32 label map (0 = background).
+        links: the candidates (None: nothing to join).
+        ids: (K,) ids with a cluster now, backward motions ``thetas`` (K,), ``trans``
+            (K, 2) (current -> previous, relative to the camera).
+        cur_gray, prev_gray: (H, W) float32 grey frames (``prev_gray`` camera-stabilised).
+        still: (H, W) float32 grey levels by which "nothing moved" misses each pixel.
+
+    Returns:
+        (H, W) int32 label map: ``labels`` plus the joined regions (only background
+        pixels change; ``labels`` itself where none joins).
+    """
+    if links is None:
+        return labels
+    h, w = labels.shape
+    x, y, bw, bh = (links.stats[:, i] for i in range(4))  # each region's box
+    band_kernel = np.ones((2 * BAND + 1, 2 * BAND + 1), np.uint8)
+    reach = np.ones((2 * REACH + 1, 2 * REACH + 1), np.uint8)
+    static = cv2.blur(still, (3, 3))
+    out = labels.copy()
+    for k, c, kept in links.pairs:
+        box = (slice(max(y[c] - BAND, 0), min(y[c] + bh[c] + BAND, h)),
+               slice(max(x[c] - BAND, 0), min(x[c] + bw[c] + BAND, w)))
+        region = links.regions[box] == c
+        band = cv2.dilate(region.astype(np.uint8), band_kernel) > 0
+        moved = photometric_residual(cur_gray, prev_gray, rigid_matrix(thetas[k], trans[k]),
+                                     box)[band].mean()
+        nothing = static[box][band].mean()
+        if (moved <= nothing + KEEP_TOLERANCE if kept
+                else nothing < STILL_LEVELS and moved <= nothing - GAIN):
+            grown = cv2.dilate(region.astype(np.uint8), reach) > 0  # with its edge pixels
+            sub = out[box]
+            sub[grown & (sub == 0) & (region | ~links.flat[box])] = ids[k]
     return out
+
+
+def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
+                      trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
+                      prev_gray: np.ndarray, still: np.ndarray, speed: np.ndarray,
+                      joined: np.ndarray, *, move_threshold: float, min_area: int,
+                      half_gradient: np.ndarray | None = None) -> np.ndarray:
+    """The label map with flat links that move along themselves joined to their MotionBit:
+    :func:`flat_link_candidates` then :func:`join_flat_links` (the segmenter calls the two
+    apart, to ask for the motions only where a link is a candidate).
+
+    Args:
+        labels, ids, rgb, speed, joined, move_threshold, min_area, half_gradient: as
+            :func:`flat_link_candidates` reads them.
+        thetas, trans, cur_gray, prev_gray, still: as :func:`join_flat_links` reads them.
+
+    Returns:
+        (H, W) int32 label map: ``labels`` plus the joined regions (only background
+        pixels change).
+    """
+    links = flat_link_candidates(labels, ids, rgb, speed, joined,
+                                 move_threshold=move_threshold, min_area=min_area,
+                                 half_gradient=half_gradient)
+    return join_flat_links(labels, links, ids, thetas, trans, cur_gray, prev_gray, still)
 
 
 def carried_joins(with_links: np.ndarray, labels: np.ndarray, group_of: dict[int, int]

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
+from functools import partial
+from typing import Any
 
 import cv2
 
-__all__ = ["second_thread"]
+__all__ = ["Task", "second_thread"]
 
 
 class _Inline(Executor):
@@ -35,3 +37,20 @@ def second_thread() -> Executor:
     if cv2.getNumThreads() > 1:
         return ThreadPoolExecutor(max_workers=1, thread_name_prefix="motionbits")
     return _Inline()
+
+
+class Task:
+    """``fn(*args)`` handed to an executor whose queue may hold other work first: the
+    caller that needs its result before the executor got to it runs it in its own thread
+    rather than wait behind that work."""
+
+    def __init__(self, executor: Executor, fn: Callable, /, *args: Any) -> None:
+        self._call = partial(fn, *args)
+        self._future = executor.submit(self._call)
+
+    def result(self) -> Any:
+        """``fn(*args)``: run here if the executor has not started it, else waited for
+        (its exception re-raised)."""
+        if self._future.cancel():
+            self._future = _Inline().submit(self._call)
+        return self._future.result()

@@ -14,7 +14,8 @@ import cv2
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from motionbits.aperture import carried_joins, half_colour_gradient, join_flat_regions
+from motionbits.aperture import (carried_joins, flat_link_candidates, half_colour_gradient,
+                                 join_flat_links)
 from motionbits.arrivals import Arrivals
 from motionbits.backend import make_ops
 from motionbits.boxes import label_areas, nonzero_box, run_counts
@@ -51,7 +52,7 @@ from motionbits.records import (
 from motionbits.resting import RestingMarks
 from motionbits.retirement import APART_CELLS, Origin, moved_once, retire, retire_shadows
 from motionbits.revealed import StaticMemory, carry_at_rest
-from motionbits.second_thread import second_thread
+from motionbits.second_thread import Task, second_thread
 from motionbits.setdown import SetDown
 from motionbits.shadows import cast_shadows, shadow_map, trim_shadows
 from motionbits.temporal import TemporalState
@@ -526,17 +527,19 @@ class MotionBitsSegmenter:
             remembered = self._helper.submit(self._remember, cur, cur_g, prev_g, labels, raw,
                                              speed, reliable, still_seen)
             # the twists reported: each moving MotionBit's motion refined on its own pixels
-            # (flow reads rotations low) -- those a shown MotionBit reports
+            # (flow reads rotations low) -- those a shown MotionBit reports; on the second
+            # thread after the memories, unless a flat link's test asks for them first
             source = twist_sources(node_ids, ids, rep)
-            thetas, trans = refine_moving_motions(cur_g, prev_g, labels, ids, thetas, trans,
-                                                  moving & set(source.values()))
+            refined = Task(self._helper, refine_moving_motions, cur_g, prev_g, labels, ids,
+                           thetas, trans, moving & set(source.values()))
             # the masks shown (one per group) take the flat links that move along
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
-            with_links = join_flat_regions(
-                labels, ids, thetas, trans, cur, cur_g, prev_g, still, speed, joined,
-                move_threshold=cfg.move_threshold, min_area=speck_area,
-                half_gradient=half_gradient)
+            links = flat_link_candidates(labels, ids, cur, speed, joined,
+                                         move_threshold=cfg.move_threshold,
+                                         min_area=speck_area, half_gradient=half_gradient)
+            with_links = labels if links is None else join_flat_links(
+                labels, links, ids, *refined.result(), cur_g, prev_g, still)
             self._joined = (np.zeros(labels.shape, np.int32) if with_links is labels  # none
                             else carried_joins(with_links, labels, group_of))
             state = group_map(with_links, rep)
@@ -583,6 +586,7 @@ class MotionBitsSegmenter:
             numbers, self._next_id = self._numbers.assign(shown, with_links, rep,
                                                           self._next_id)
             member_numbers, numbered_source = by_number(rep, source, numbers)
+            thetas, trans = refined.result()
             result = build_result(self.frame_index, group_map(shown, numbers), node_ids, ids,
                                   thetas, trans, moving, member_numbers, numbered_source,
                                   self._spans, grid, self._input_size)

@@ -4,7 +4,8 @@ view from the top border, rigidly attached to a textured block, both moving down
 import cv2
 import numpy as np
 
-from motionbits.aperture import carried_joins, flat_regions, join_flat_regions
+from motionbits.aperture import (carried_joins, flat_link_candidates, flat_regions,
+                                 join_flat_regions)
 
 H, W = 160, 160
 BAR = (slice(None), slice(70, 86))  # columns of the flat bar
@@ -67,6 +68,26 @@ def test_a_flat_bar_moving_along_itself_joins_its_body():
     assert changed[:, 0].max() < 75 and 67 <= changed[:, 1].min() <= changed[:, 1].max() <= 88
     # a bar the flow does not move stays background
     assert (_join(prev, cur, moving=False)[0:70, 72:84] == 0).all()
+
+
+def test_the_motions_are_asked_for_only_where_a_link_may_join():
+    """The segmenter refines the motions on its second thread and asks for them only
+    where :func:`flat_link_candidates` names a (MotionBit, region) pair to test."""
+    prev, cur = _scene(0), _scene(3)
+    labels = np.zeros((H, W), np.int32)
+    labels[72:103, 57:99] = 1
+
+    def candidates(speed):
+        return flat_link_candidates(labels, np.array([1]), cur, speed,
+                                    np.zeros((H, W), np.int32), move_threshold=0.6,
+                                    min_area=60)
+
+    speed = np.zeros((H, W), np.float32)
+    assert candidates(speed) is None  # nothing moved along itself: no test
+    speed[0:103, BAR[1]] = 3.0
+    links = candidates(speed)
+    assert links is not None and [(k, kept) for k, _, kept in links.pairs] == [(0, False)]
+    assert (links.regions[10:60, 72:84] == links.pairs[0][1]).all()  # the bar
 
 
 def test_a_flat_region_inside_the_view_does_not_join():

@@ -97,7 +97,51 @@ def test_an_error_in_a_frame_waits_for_the_second_thread(monkeypatch):
         raise RuntimeError("a step failed")
 
     monkeypatch.setattr(seg, "_remember", slow_remember)
-    monkeypatch.setattr(seg_module, "join_flat_regions", failing)  # after the memories start
+    monkeypatch.setattr(seg_module, "flat_link_candidates", failing)  # after the memories start
     with pytest.raises(RuntimeError, match="a step failed"):
         seg.update(frames[2])
     assert done.is_set()
+
+
+def test_a_task_queued_behind_other_work_runs_in_the_caller_that_needs_it():
+    """``Task.result()`` runs the task in the calling thread when the second thread has
+    not started it (busy with earlier work), once; a task it already ran is waited for."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    from motionbits.second_thread import Task
+
+    release = threading.Event()
+    ran_in = []
+
+    def record(x):
+        ran_in.append(threading.current_thread().name)
+        return 2 * x
+
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="second") as ex:
+        busy = ex.submit(release.wait)  # the second thread's earlier work
+        task = Task(ex, record, 21)
+        assert task.result() == 42 and ran_in == [threading.current_thread().name]
+        release.set()
+        busy.result()
+        assert task.result() == 42 and len(ran_in) == 1  # not run again
+        done = Task(ex, record, 1)
+        ex.submit(int).result()  # the queue is empty: the second thread ran it
+        assert done.result() == 2 and ran_in[-1].startswith("second")
+
+
+def test_a_task_that_fails_raises_in_the_caller():
+    from concurrent.futures import ThreadPoolExecutor
+
+    from motionbits.second_thread import Task, _Inline
+
+    def fail():
+        raise ValueError("bad input")
+
+    with ThreadPoolExecutor(max_workers=1) as ex:
+        task = Task(ex, fail)
+        ex.submit(int).result()
+        with pytest.raises(ValueError, match="bad input"):
+            task.result()
+    with pytest.raises(ValueError, match="bad input"):  # inline
+        Task(_Inline(), fail).result()
