@@ -352,6 +352,8 @@ class MotionBitsSegmenter:
             self._camera_moved = cam is not None
             if prev_m is not self._prev:  # the camera-stabilised frame ("nothing moved");
                 prev_g = _gray(prev_m)  # pulling it back along flow_m gives ``pulled`` again
+            # how far "nothing moved" misses each pixel, on the second thread meanwhile
+            looked = self._helper.submit(self._static_look, cur, cur_g, prev_g, world)
             if world is not None and self._resting:
                 # the MotionBits at rest follow the static world's model, not the flow
                 prior, prior_valid = carry_at_rest(
@@ -397,12 +399,7 @@ class MotionBitsSegmenter:
         with self._stage("masks"):
             # computed only if some cluster is a candidate for a new MotionBit
             win = max(EVIDENCE_WINDOW, int(round(max(grid.cell))) | 1)
-            # "nothing moved" explains a pixel also when only the light changed on it
-            still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(grid.cell))
-                     if cfg.relight_sigma else np.abs(cur_g - prev_g))
-            # ... and where it shows the static world seen again after a body uncovered it
-            # (under a moving camera the memory follows the static world's model first)
-            revealed = self._memory.observe(cur, cur_g, still, world)
+            still, revealed = looked.result()
             # births only (computed once, if a cluster asks); under a moving camera a birth
             # must beat the static world's model given its error
             evidence = cache(lambda: motion_gain(
@@ -613,6 +610,18 @@ class MotionBitsSegmenter:
             self._arrivals.update(cur, calm, labels, reliable & ~standing)
             self._first_look.update(cur, calm, labels)
         return shadows, calm
+
+    def _static_look(self, cur: np.ndarray, cur_g: np.ndarray, prev_g: np.ndarray,
+                     world: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+        """How far "nothing moved" misses each pixel ((h, w) float32 grey levels) -- also
+        when only the light changed on it, and lowered where the static world is seen again
+        after a body uncovered it -- and those revealed pixels ((h, w) bool; None: the
+        memory is off). Under a moving camera the memory follows the static world's model
+        (``world``) first. Writes only the static world's memory."""
+        cfg = self.config
+        still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(self._grid.cell))
+                 if cfg.relight_sigma else np.abs(cur_g - prev_g))
+        return still, self._memory.observe(cur, cur_g, still, world)
 
     def _world_motion(self, flow_fwd: np.ndarray, flow_back: np.ndarray,
                       back_maps: tuple[np.ndarray, np.ndarray], cur: np.ndarray):
