@@ -144,7 +144,7 @@ class FlatLinks(NamedTuple):
 
 def flat_link_candidates(labels: np.ndarray, ids: np.ndarray, rgb: np.ndarray,
                          speed: np.ndarray, joined: np.ndarray, *, move_threshold: float,
-                         min_area: int, half_gradient: np.ndarray | None = None
+                         min_area: int, flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
                          ) -> FlatLinks | None:
     """The flat regions that may join a MotionBit: those touching its mask that moved with
     it and reach the border, or that it joined at the last frame (no motion needed).
@@ -158,14 +158,14 @@ def flat_link_candidates(labels: np.ndarray, ids: np.ndarray, rgb: np.ndarray,
             their group's id (:func:`carried_joins`): a region stays joined to that id.
         move_threshold: px; a pixel's flow moves above this.
         min_area: px; smaller regions never join.
-        half_gradient: ``half_colour_gradient(rgb)`` if already computed.
+        flat: ``flat_regions(rgb)`` if already computed.
 
     Returns:
         The regions and the (MotionBit, region) pairs to test, or None where there is none.
     """
     if not len(ids):
         return None
-    flat, regions, stats = flat_regions(rgb, half_gradient=half_gradient)
+    flat, regions, stats = flat_regions(rgb) if flat is None else flat
     n = len(stats)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     moving = speed > move_threshold
@@ -244,13 +244,14 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
                       trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
                       prev_gray: np.ndarray, still: np.ndarray, speed: np.ndarray,
                       joined: np.ndarray, *, move_threshold: float, min_area: int,
-                      half_gradient: np.ndarray | None = None) -> np.ndarray:
+                      flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                      ) -> np.ndarray:
     """The label map with flat links that move along themselves joined to their MotionBit:
     :func:`flat_link_candidates` then :func:`join_flat_links` (the segmenter calls the two
     apart, to ask for the motions only where a link is a candidate).
 
     Args:
-        labels, ids, rgb, speed, joined, move_threshold, min_area, half_gradient: as
+        labels, ids, rgb, speed, joined, move_threshold, min_area, flat: as
             :func:`flat_link_candidates` reads them.
         thetas, trans, cur_gray, prev_gray, still: as :func:`join_flat_links` reads them.
 
@@ -260,7 +261,7 @@ def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
     """
     links = flat_link_candidates(labels, ids, rgb, speed, joined,
                                  move_threshold=move_threshold, min_area=min_area,
-                                 half_gradient=half_gradient)
+                                 flat=flat)
     return join_flat_links(labels, links, ids, thetas, trans, cur_gray, prev_gray, still)
 
 

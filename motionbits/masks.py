@@ -12,7 +12,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motionbits.aperture import flat_regions, ground_regions, reaches_border
+from motionbits.aperture import (FLAT_GRADIENT, flat_regions, ground_regions,
+                                 half_colour_gradient, reaches_border)
 from motionbits.boxes import at_border, grow_box, label_areas, label_boxes
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
@@ -20,7 +21,8 @@ from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "drop_labels",
            "hide_small", "hide_edgeless", "outline_gradient", "snap_to_edges",
-           "trim_flat_background", "SPECK_CELLS", "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT",
+           "trim_flat_background", "flat_looks", "SPECK_CELLS", "EDGELESS_GRADIENT",
+           "HALO_FLAT_GRADIENT",
            "HALO_MASK_SHARE", "hide_thin", "THIN_SHARE", "THIN_PIECE_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
@@ -320,8 +322,22 @@ def hide_thin(label_map: np.ndarray, side: int) -> np.ndarray:
     return drop_labels(out, thin)
 
 
+def flat_looks(rgb: np.ndarray, half_gradient: np.ndarray | None = None
+               ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...]:
+    """The (H, W, 3) uint8 frame's flat regions as the flat links' test reads them
+    (:func:`motionbits.aperture.flat_link_candidates`, ``FLAT_GRADIENT``) and as
+    :func:`trim_flat_background` does (``HALO_FLAT_GRADIENT``): two
+    :func:`motionbits.aperture.flat_regions` results, from ``half_gradient``
+    (``half_colour_gradient(rgb)``) if already computed."""
+    if half_gradient is None:
+        half_gradient = half_colour_gradient(rgb)
+    return (flat_regions(rgb, FLAT_GRADIENT, half_gradient),
+            flat_regions(rgb, HALO_FLAT_GRADIENT, half_gradient))
+
+
 def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
-                         half_gradient: np.ndarray | None = None) -> np.ndarray:
+                         flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                         ) -> np.ndarray:
     """Give back to the background the mask pixels that lie in a flat region of the image
     of which their mask covers less than ``HALO_MASK_SHARE``; give a mask the rest of a
     flat region of which it covers at least ``FACE_MASK_SHARE`` (``CLOSED_FACE_SHARE`` of a
@@ -345,7 +361,8 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     Args:
         label_map: (H, W) int32 labels (0 = background).
         rgb: (H, W, 3) uint8 frame at the same size.
-        half_gradient: ``motionbits.aperture.half_colour_gradient(rgb)`` if already computed.
+        flat: ``motionbits.aperture.flat_regions(rgb, HALO_FLAT_GRADIENT)`` if already
+            computed.
 
     Returns:
         (H, W) int32 label map: each mask of ``label_map`` less its halos, plus the
@@ -353,7 +370,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     """
     if not label_map.any():
         return label_map
-    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT, half_gradient)
+    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT) if flat is None else flat
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     # the labelled pixels of flat regions (region 0: the pixels that are not flat), each
     # (region, label) pair as one integer: the share of its region each mask covers

@@ -38,8 +38,8 @@ from motionbits.graph import (
 )
 from motionbits.identity import identify_clusters
 from motionbits.masks import (SPECK_CELLS, assign_pixels, drop_labels, fit_cluster_motions,
-                              hide_edgeless, hide_small, hide_thin, remove_specks, snap_to_edges,
-                              trim_flat_background)
+                              flat_looks, hide_edgeless, hide_small, hide_thin, remove_specks,
+                              snap_to_edges, trim_flat_background)
 from motionbits.merging import (MIN_MOVED, MotionBitGroups, apply_joins, drop_seen_still,
                                 join_convex, observe_touching, seen_still, standing_still)
 from motionbits.mcl import cluster_components
@@ -352,8 +352,10 @@ class MotionBitsSegmenter:
             self._camera_moved = cam is not None
             if prev_m is not self._prev:  # the camera-stabilised frame ("nothing moved");
                 prev_g = _gray(prev_m)  # pulling it back along flow_m gives ``pulled`` again
-            # how far "nothing moved" misses each pixel, on the second thread meanwhile
+            # how far "nothing moved" misses each pixel, and the frame's flat regions (the
+            # flat links', the overhangs'), on the second thread meanwhile
             looked = self._helper.submit(self._static_look, cur, cur_g, prev_g, world)
+            flats = self._helper.submit(flat_looks, cur, half_gradient)
             if world is not None and self._resting:
                 # the MotionBits at rest follow the static world's model, not the flow
                 prior, prior_valid = carry_at_rest(
@@ -534,7 +536,7 @@ class MotionBitsSegmenter:
             # masks (trimming them would compound from frame to frame)
             links = flat_link_candidates(labels, ids, cur, speed, joined,
                                          move_threshold=cfg.move_threshold,
-                                         min_area=speck_area, half_gradient=half_gradient)
+                                         min_area=speck_area, flat=flats.result()[0])
             with_links = labels if links is None else join_flat_links(
                 labels, links, ids, *refined.result(), cur_g, prev_g, still)
             self._joined = (np.zeros(labels.shape, np.int32) if with_links is labels  # none
@@ -547,7 +549,7 @@ class MotionBitsSegmenter:
             # are trimmed and it is completed, it covers MIN_SHOWN_CELLS grid cells
             # (smaller ones are flow noise, or a sliver of smeared flow); its outline goes
             # where its colours end (flow is smooth across a moving body's outline)
-            shown = trim_flat_background(hide_edgeless(shown, gradient), cur, half_gradient)
+            shown = trim_flat_background(hide_edgeless(shown, gradient), cur, flats.result()[1])
             pieces = snap_to_colours(shown, cur, int(round(cfg.colour_band * max(grid.cell))))
             min_shown = MIN_SHOWN_CELLS * grid.cell[0] * grid.cell[1]
             # and each mark seen whole takes the rest of its body by colour (a moving one
