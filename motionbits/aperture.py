@@ -144,7 +144,8 @@ class FlatLinks(NamedTuple):
 
 def flat_link_candidates(labels: np.ndarray, ids: np.ndarray, rgb: np.ndarray,
                          speed: np.ndarray, joined: np.ndarray, *, move_threshold: float,
-                         min_area: int, flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                         min_area: int,
+                         flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
                          ) -> FlatLinks | None:
     """The flat regions that may join a MotionBit: those touching its mask that moved with
     it and reach the border, or that it joined at the last frame (no motion needed).
