@@ -37,7 +37,7 @@ from motionbits.evidence import photometric_residual
 from motionbits.twists import rigid_matrix
 
 __all__ = ["FlatLinks", "flat_link_candidates", "flat_regions", "half_colour_gradient",
-           "join_flat_links", "join_flat_regions", "carried_joins",
+           "join_flat_links", "carried_joins",
            "reaches_border", "ground_regions", "FLAT_GRADIENT", "MOVING_SHARE",
            "STILL_LEVELS", "GAIN", "KEEP_TOLERANCE", "GROUND_SHARE"]
 
@@ -145,7 +145,7 @@ class FlatLinks(NamedTuple):
 def flat_link_candidates(labels: np.ndarray, ids: np.ndarray, rgb: np.ndarray,
                          speed: np.ndarray, joined: np.ndarray, *, move_threshold: float,
                          min_area: int,
-                         flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                         flat_look: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
                          ) -> FlatLinks | None:
     """The flat regions that may join a MotionBit: those touching its mask that moved with
     it and reach the border, or that it joined at the last frame (no motion needed).
@@ -159,14 +159,14 @@ def flat_link_candidates(labels: np.ndarray, ids: np.ndarray, rgb: np.ndarray,
             their group's id (:func:`carried_joins`): a region stays joined to that id.
         move_threshold: px; a pixel's flow moves above this.
         min_area: px; smaller regions never join.
-        flat: ``flat_regions(rgb)`` if already computed.
+        flat_look: ``flat_regions(rgb)`` if already computed.
 
     Returns:
         The regions and the (MotionBit, region) pairs to test, or None where there is none.
     """
     if not len(ids):
         return None
-    flat, regions, stats = flat_regions(rgb) if flat is None else flat
+    flat, regions, stats = flat_regions(rgb) if flat_look is None else flat_look
     n = len(stats)
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     moving = speed > move_threshold
@@ -241,34 +241,9 @@ def join_flat_links(labels: np.ndarray, links: FlatLinks | None, ids: np.ndarray
     return out
 
 
-def join_flat_regions(labels: np.ndarray, ids: np.ndarray, thetas: np.ndarray,
-                      trans: np.ndarray, rgb: np.ndarray, cur_gray: np.ndarray,
-                      prev_gray: np.ndarray, still: np.ndarray, speed: np.ndarray,
-                      joined: np.ndarray, *, move_threshold: float, min_area: int,
-                      flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-                      ) -> np.ndarray:
-    """The label map with flat links that move along themselves joined to their MotionBit:
-    :func:`flat_link_candidates` then :func:`join_flat_links` (the segmenter calls the two
-    apart, to ask for the motions only where a link is a candidate).
-
-    Args:
-        labels, ids, rgb, speed, joined, move_threshold, min_area, flat: as
-            :func:`flat_link_candidates` reads them.
-        thetas, trans, cur_gray, prev_gray, still: as :func:`join_flat_links` reads them.
-
-    Returns:
-        (H, W) int32 label map: ``labels`` plus the joined regions (only background
-        pixels change).
-    """
-    links = flat_link_candidates(labels, ids, rgb, speed, joined,
-                                 move_threshold=move_threshold, min_area=min_area,
-                                 flat=flat)
-    return join_flat_links(labels, links, ids, thetas, trans, cur_gray, prev_gray, still)
-
-
 def carried_joins(with_links: np.ndarray, labels: np.ndarray, group_of: dict[int, int]
                   ) -> np.ndarray:
-    """The pixels :func:`join_flat_regions` added, each under the group of the MotionBit
+    """The pixels :func:`join_flat_links` added, each under the group of the MotionBit
     that joined it, to be carried to the next frame as its ``joined``.
 
     Args:

@@ -336,7 +336,7 @@ def flat_looks(rgb: np.ndarray, half_gradient: np.ndarray | None = None
 
 
 def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
-                         flat: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                         flat_look: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
                          ) -> np.ndarray:
     """Give back to the background the mask pixels that lie in a flat region of the image
     of which their mask covers less than ``HALO_MASK_SHARE``; give a mask the rest of a
@@ -361,8 +361,8 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     Args:
         label_map: (H, W) int32 labels (0 = background).
         rgb: (H, W, 3) uint8 frame at the same size.
-        flat: ``motionbits.aperture.flat_regions(rgb, HALO_FLAT_GRADIENT)`` if already
-            computed.
+        flat_look: ``motionbits.aperture.flat_regions(rgb, HALO_FLAT_GRADIENT)`` if
+            already computed.
 
     Returns:
         (H, W) int32 label map: each mask of ``label_map`` less its halos, plus the
@@ -370,7 +370,7 @@ def trim_flat_background(label_map: np.ndarray, rgb: np.ndarray,
     """
     if not label_map.any():
         return label_map
-    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT) if flat is None else flat
+    _, regions, stats = flat_regions(rgb, HALO_FLAT_GRADIENT) if flat_look is None else flat_look
     area = np.maximum(stats[:, cv2.CC_STAT_AREA], 1).astype(np.float64)
     # the labelled pixels of flat regions (region 0: the pixels that are not flat), each
     # (region, label) pair as one integer: the share of its region each mask covers

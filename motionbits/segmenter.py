@@ -536,7 +536,7 @@ class MotionBitsSegmenter:
             # masks (trimming them would compound from frame to frame)
             links = flat_link_candidates(labels, ids, cur, speed, joined,
                                          move_threshold=cfg.move_threshold,
-                                         min_area=speck_area, flat=flats.result()[0])
+                                         min_area=speck_area, flat_look=flats.result()[0])
             with_links = labels if links is None else join_flat_links(
                 labels, links, ids, *refined.result(), cur_g, prev_g, still)
             self._joined = (np.zeros(labels.shape, np.int32) if with_links is labels  # none

@@ -5,7 +5,7 @@ import cv2
 import numpy as np
 
 from motionbits.aperture import (carried_joins, flat_link_candidates, flat_regions,
-                                 join_flat_regions)
+                                 join_flat_links)
 
 H, W = 160, 160
 BAR = (slice(None), slice(70, 86))  # columns of the flat bar
@@ -37,6 +37,14 @@ def _scene(shift: int, bar_top: int = 0, background_seed: int = 0) -> np.ndarray
 
 def _gray(frame):
     return cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY).astype(np.float32)
+
+
+def join_flat_regions(labels, ids, thetas, trans, rgb, cur_gray, prev_gray, still, speed,
+                      joined, *, move_threshold, min_area):
+    """The segmenter's two steps: the candidate links, then the motions' test on them."""
+    links = flat_link_candidates(labels, ids, rgb, speed, joined,
+                                 move_threshold=move_threshold, min_area=min_area)
+    return join_flat_links(labels, links, ids, thetas, trans, cur_gray, prev_gray, still)
 
 
 def _join(prev, cur, moving=True, joined=None, bar_top=0):
