@@ -9,6 +9,8 @@ its mask -- and specks are removed.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import cv2
 import numpy as np
 
@@ -19,8 +21,8 @@ from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
-__all__ = ["fit_cluster_motions", "assign_pixels", "fill_holes", "remove_specks", "drop_labels",
-           "hide_small", "hide_edgeless", "outline_gradient", "snap_to_edges",
+__all__ = ["fit_cluster_motions", "StaticCost", "static_cost", "assign_pixels", "fill_holes",
+           "remove_specks", "drop_labels", "hide_small", "hide_edgeless", "outline_gradient", "snap_to_edges",
            "trim_flat_background", "flat_looks", "SPECK_CELLS", "EDGELESS_GRADIENT",
            "HALO_FLAT_GRADIENT",
            "HALO_MASK_SHARE", "hide_thin", "THIN_SHARE", "THIN_PIECE_SHARE"]
@@ -121,13 +123,65 @@ def _support_box(grid: NodeGrid, node_labels: np.ndarray, label: int
     return rows, cols, m[node_y[rows]][:, node_x[cols]].view(bool)
 
 
+class StaticCost(NamedTuple):
+    """What "nothing moved" costs at each pixel of a frame before any MotionBit competes
+    (:func:`static_cost`; :func:`assign_pixels`). Each (H, W) float32."""
+
+    #: grey levels: how far "nothing moved" misses the pixel (``PHOTO_WINDOW`` mean)
+    photo: np.ndarray
+    #: px: the static motion's cost -- its flow residual (the flow's length) weighted by
+    #: ``texture``, plus the photometric term
+    cost: np.ndarray
+    #: px: the prior's credit, where the carried label is valid (else 0)
+    credit: np.ndarray
+    #: px: the cost a MotionBit must beat: ``cost``, less the credit where the
+    #: background keeps it (no carried label, or one its motion never earned)
+    best: np.ndarray
+    #: in [0, 1]: weight of a flow residual (1 = textured, its flow measured)
+    texture: np.ndarray
+
+
+def static_cost(speed: np.ndarray, gradient: np.ndarray, still: np.ndarray,
+                prior: np.ndarray, prior_valid: np.ndarray, earned: np.ndarray, *,
+                flow_texture: float, bonus: float, photo_weight: float,
+                revealed: np.ndarray | None = None) -> StaticCost:
+    """The static motion's side of :func:`assign_pixels`, which reads nothing of the
+    frame's clusters (the segmenter computes it while they are found).
+
+    Args:
+        speed: (H, W) float32 px the flow moves each pixel (the static motion's residual).
+        gradient: (H, W) float32 grey levels per px of image gradient
+            (:func:`motionbits.evidence.gradient_magnitude`); over ``flow_texture`` a
+            pixel's flow counts in full, below it in proportion (flat pixels' flow is
+            interpolated).
+        still: (H, W) float32 grey levels by which "nothing moved" misses each pixel
+            (:func:`motionbits.evidence.static_residual`).
+        prior, prior_valid, earned: as in :func:`assign_pixels`.
+        bonus, photo_weight: as in :func:`assign_pixels`.
+        revealed: (H, W) bool or None, background seen again after a body uncovered it
+            (:class:`motionbits.revealed.StaticMemory`): ``still`` there already holds the
+            residual against the remembered background, and the static cost drops its flow
+            term (the flow smears the body's motion into its wake).
+    """
+    texture = np.minimum(gradient / flow_texture, 1.0)
+    photo = cv2.blur(still, (PHOTO_WINDOW, PHOTO_WINDOW))
+    cost = texture * speed + photo_weight * photo
+    if revealed is not None:
+        cost[revealed] = photo_weight * photo[revealed]
+    # last frame's label is credited where it was carried consistently; against the
+    # background, a MotionBit's label only where its motion once showed in the images
+    # (``earned``): elsewhere the background gets the same credit
+    credit = prior_valid * np.float32(bonus)  # bonus or 0
+    best = cost - credit * ((prior == 0) | ~earned)
+    return StaticCost(photo, cost, credit, best, texture)
+
+
 def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, thetas: np.ndarray,
-                  trans: np.ndarray, flow_back: np.ndarray, speed: np.ndarray, cur_gray: np.ndarray,
-                  prev_gray: np.ndarray, still: np.ndarray, prior: np.ndarray,
-                  prior_valid: np.ndarray, texture: np.ndarray, earned: np.ndarray, *,
+                  trans: np.ndarray, flow_back: np.ndarray, cur_gray: np.ndarray,
+                  prev_gray: np.ndarray, static: StaticCost, prior: np.ndarray,
+                  prior_valid: np.ndarray, earned: np.ndarray, *,
                   bonus: float, photo_weight: float, evidence: float, kept: np.ndarray,
-                  ambiguous: float, revealed: np.ndarray | None = None
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  ambiguous: float) -> tuple[np.ndarray, np.ndarray]:
     """Label every pixel by the motion that best explains it.
 
     The cost of a motion at a pixel is its flow residual (px), weighted by how much texture
@@ -143,14 +197,11 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         labels: (K,) ids of the clusters, with backward motions ``thetas`` (K,), ``trans``
             (K, 2).
         flow_back: (H, W, 2) flow current -> previous.
-        speed: (H, W) float32 its length (``cv2.magnitude``).
         cur_gray, prev_gray: (H, W) float32 grey frames.
-        still: (H, W) float32 grey levels by which "nothing moved" misses each pixel
-            (:func:`motionbits.evidence.static_residual`).
+        static: the static motion's cost (:func:`static_cost`, from these ``prior``,
+            ``prior_valid``, ``earned``, ``bonus`` and ``photo_weight``).
         prior: (H, W) int32 last frame's label map carried to this frame.
         prior_valid: (H, W) bool, where ``prior`` is trustworthy (consistent flow).
-        texture: (H, W) float32 in [0, 1], weight of the flow residual (1 = textured pixel
-            whose flow is measured, 0 = flat pixel whose flow is interpolated).
         earned: (H, W) bool, carried like ``prior``: where the pixel's MotionBit once
             explained its images better than "static" by ``evidence`` grey levels. Only
             there does a carried MotionBit label get the credit against the background: a
@@ -165,30 +216,19 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         ambiguous: px; where a cluster's motion moves a pixel less than this, the motion
             cannot be told from the background (e.g. near a centre of rotation) and the
             node-level cluster label gets the same credit as the prior.
-        revealed: (H, W) bool or None, background seen again after a body uncovered it
-            (:class:`motionbits.revealed.StaticMemory`): ``still`` there already holds the
-            residual against the remembered background, and the static cost drops its flow
-            term (the flow smears the body's motion into its wake).
 
     Returns:
         (H, W) int32 label map and the (H, W) bool ``earned`` map of this frame.
     """
     h, w = flow_back.shape[:2]
     window = PHOTO_WINDOW
-    static_photo = cv2.blur(still, (window, window))
-    static_cost = texture * speed + photo_weight * static_photo
-    if revealed is not None:
-        static_cost[revealed] = photo_weight * static_photo[revealed]
-    # last frame's label is credited where it was carried consistently; against the
-    # background, a MotionBit's label only where its motion once showed in the images
-    # (``earned``): elsewhere the background gets the same credit
-    credit = prior_valid * np.float32(bonus)  # (H, W) float32: bonus or 0
-    best = static_cost - credit * ((prior == 0) | ~earned)
+    texture, static_photo, credit = static.texture, static.photo, static.credit
+    best = static.best.copy()
     out = np.zeros((h, w), np.int32)
     shown = np.zeros((h, w), bool)
     node_map = grid.to_image(node_labels.astype(np.int32))
     if len(kept):  # on each one's box of ``prior``
-        kept_cost = static_cost - credit
+        kept_cost = static.cost - credit
         kept_boxes = label_boxes(prior, max_label=int(max(kept)))
     for lab in kept:
         box = kept_boxes[lab - 1]

@@ -6,6 +6,7 @@ Each step lives in its own module; this one holds the stream's state and calls t
 from __future__ import annotations
 
 import time
+from concurrent.futures import Future
 from contextlib import contextmanager
 from functools import cache
 from typing import Iterator
@@ -37,9 +38,10 @@ from motionbits.graph import (
     twist_edge_weights,
 )
 from motionbits.identity import identify_clusters
-from motionbits.masks import (SPECK_CELLS, assign_pixels, drop_labels, fit_cluster_motions,
-                              flat_looks, hide_edgeless, hide_small, hide_thin, remove_specks,
-                              snap_to_edges, trim_flat_background)
+from motionbits.masks import (SPECK_CELLS, StaticCost, assign_pixels, drop_labels,
+                              fit_cluster_motions, flat_looks, hide_edgeless, hide_small,
+                              hide_thin, remove_specks, snap_to_edges, static_cost,
+                              trim_flat_background)
 from motionbits.merging import (MIN_MOVED, MotionBitGroups, apply_joins, drop_seen_still,
                                 join_convex, observe_touching, seen_still, standing_still)
 from motionbits.mcl import cluster_components
@@ -363,6 +365,9 @@ class MotionBitsSegmenter:
                     lambda: appearance_consistent(cur_g, prev_g, gradient,
                                                   tolerance=cfg.carry_tolerance,
                                                   gradient_gain=cfg.carry_gradient))
+            # and what "nothing moved" costs at each pixel, for the masks
+            costs = self._helper.submit(self._static_cost, looked, flow_m, gradient, prior,
+                                        prior_valid, earned)
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
@@ -437,13 +442,11 @@ class MotionBitsSegmenter:
                     int(round(APART_CELLS * max(grid.cell))), cfg.retire_margin,
                     cfg.carry_tolerance))))
             carried_earned = earned
-            speed = cv2.magnitude(flow_m[..., 0], flow_m[..., 1])  # (h, w) px the pixel moves
+            speed, static = costs.result()
             labels, earned = assign_pixels(
-                grid, node_ids, ids, thetas, trans, flow_m, speed, cur_g, prev_g, still,
-                prior, prior_valid, np.minimum(gradient / cfg.flow_texture, 1.0), earned,
-                bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
-                evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold,
-                revealed=revealed)
+                grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g, static, prior,
+                prior_valid, earned, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
+                evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             # a point seen standing still while a MotionBit moved does not join it now
             # (with a still camera: under a moving one, standing still is judged against
             # the static world's model, and parallax or a moving shadow's edge on a kerb
@@ -523,14 +526,16 @@ class MotionBitsSegmenter:
             self._prev, self._prev_gray = cur, cur_g
             # the stream's memories brought up to date on the second thread, while this one
             # makes the masks shown up to their completion (the first step that reads them)
-            remembered = self._helper.submit(self._remember, cur, cur_g, prev_g, labels, raw,
-                                             speed, reliable, still_seen)
+            remembered = self._helper.submit(self._remember, cur, cur_g, prev_g, labels,
+                                             speed, reliable)
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low) -- those a shown MotionBit reports; on the second
             # thread after the memories, unless a flat link's test asks for them first
             source = twist_sources(node_ids, ids, rep)
             refined = Task(self._helper, refine_moving_motions, cur_g, prev_g, labels, ids,
                            thetas, trans, moving & set(source.values()))
+            # then what only the next frame reads: the label history, where pixels stood
+            folded = self._helper.submit(self._fold, remembered, labels, raw, still_seen)
             # the masks shown (one per group) take the flat links that move along
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
@@ -556,7 +561,7 @@ class MotionBitsSegmenter:
             # only where its outline stops inside its body) -- the small ones last, where
             # the others left room, and only those that then cover MIN_SHOWN_CELLS
             moving_marks = {rep[i] for i in moving if rep.get(i)}  # shown labels moving now
-            shadows, calm = remembered.result()
+            shadows, calm, _ = remembered.result()
             first_look = self._first_look if calm is not None else None
             shown = complete_masks(hide_small(pieces, min_shown), cur, moving_marks, gradient,
                                    self._cuts, first_look,
@@ -586,6 +591,7 @@ class MotionBitsSegmenter:
                                                           self._next_id)
             member_numbers, numbered_source = by_number(rep, source, numbers)
             thetas, trans = refined.result()
+            folded.result()  # the stream's state whole before the frame's result is out
             result = build_result(self.frame_index, group_map(shown, numbers), node_ids, ids,
                                   thetas, trans, moving, member_numbers, numbered_source,
                                   self._spans, grid, self._input_size)
@@ -593,25 +599,31 @@ class MotionBitsSegmenter:
         return result
 
     def _remember(self, cur: np.ndarray, cur_g: np.ndarray, prev_g: np.ndarray,
-                  labels: np.ndarray, raw: np.ndarray, speed: np.ndarray, reliable: np.ndarray,
-                  still_seen: np.ndarray
-                  ) -> tuple[tuple[tuple[slice, slice], np.ndarray] | None, np.ndarray | None]:
-        """Bring the stream's memories up to this frame: the label history folded, where
-        each pixel was last seen still, the static world's look (and the arrivals' and the
+                  labels: np.ndarray, speed: np.ndarray, reliable: np.ndarray
+                  ) -> tuple[tuple[tuple[slice, slice], np.ndarray] | None, np.ndarray | None,
+                             np.ndarray]:
+        """Bring the static world's memory up to this frame (and the arrivals' and the
         first look's). Returns the cast shadows the memory saw before it moved on
-        (:func:`motionbits.shadows.cast_shadows`) and the pixels it took in (None: the
-        memory is off). Writes only those memories."""
-        cfg = self.config
-        self._temporal.fold(raw, labels, margin=int(np.ceil(max(self._grid.cell))))
-        standing = standing_still(speed, reliable, cfg.move_threshold)
-        self._still = seen_still(still_seen, standing, self.frame_index)
+        (:func:`motionbits.shadows.cast_shadows`), the pixels it took in (None: the
+        memory is off) and where the frame stands still ((h, w) bool,
+        :func:`motionbits.merging.standing_still`). Writes only those memories."""
+        standing = standing_still(speed, reliable, self.config.move_threshold)
         # before the memory moves on
         shadows = cast_shadows(self._memory, cur, labels, self._first_look)
         calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
         if calm is not None:
             self._arrivals.update(cur, calm, labels, reliable & ~standing)
             self._first_look.update(cur, calm, labels)
-        return shadows, calm
+        return shadows, calm, standing
+
+    def _fold(self, remembered: Future, labels: np.ndarray, raw: np.ndarray,
+              still_seen: np.ndarray) -> None:
+        """Fold this frame's labels into the label history and note where each pixel was
+        last seen standing still (``remembered``: :meth:`_remember`'s answer, done: the
+        second thread runs its tasks in order). Only the next frame reads them; writes
+        only those."""
+        self._temporal.fold(raw, labels, margin=int(np.ceil(max(self._grid.cell))))
+        self._still = seen_still(still_seen, remembered.result()[2], self.frame_index)
 
     def _static_look(self, cur: np.ndarray, cur_g: np.ndarray, prev_g: np.ndarray,
                      world: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
@@ -624,6 +636,20 @@ class MotionBitsSegmenter:
         still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(self._grid.cell))
                  if cfg.relight_sigma else np.abs(cur_g - prev_g))
         return still, self._memory.observe(cur, cur_g, still, world)
+
+    def _static_cost(self, looked: Future, flow: np.ndarray, gradient: np.ndarray,
+                     prior: np.ndarray, prior_valid: np.ndarray, earned: np.ndarray
+                     ) -> tuple[np.ndarray, StaticCost]:
+        """How far each pixel moves by the camera-compensated ``flow`` ((h, w) float32 px)
+        and what "nothing moved" costs there (:func:`motionbits.masks.static_cost`), given
+        :meth:`_static_look`'s answer (``looked``: done, as the second thread runs its
+        tasks in order). Reads and writes none of the stream's state."""
+        cfg = self.config
+        still, revealed = looked.result()
+        speed = cv2.magnitude(flow[..., 0], flow[..., 1])
+        return speed, static_cost(speed, gradient, still, prior, prior_valid, earned,
+                                  flow_texture=cfg.flow_texture, bonus=cfg.prior_bonus,
+                                  photo_weight=cfg.photo_weight, revealed=revealed)
 
     def _world_motion(self, flow_fwd: np.ndarray, flow_back: np.ndarray,
                       back_maps: tuple[np.ndarray, np.ndarray], cur: np.ndarray):
