@@ -172,14 +172,16 @@ class Arrivals:
             self._unlike_first = follow_ids(self._unlike_first.view(np.uint8), world) > 0
         self.passed = follow_ids(self.passed.view(np.uint8), world) > 0
 
-    def find(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
-             labels: np.ndarray, cell: tuple[float, float], moving: set[int],
+    def find(self, cur: np.ndarray, change: np.ndarray, labels: np.ndarray,
+             cell: tuple[float, float], moving: set[int],
              first_look: FirstLook | None = None) -> list[Arrival]:
         """Pieces of the current frame that arrived (module docstring).
 
         Args:
             cur: (H, W, 3) uint8 current RGB frame.
-            cur_gray, prev_gray: (H, W) float32 grey frames.
+            change: (H, W) float32 grey change since the last frame
+                (:func:`motionbits.revealed.grey_change`): what stands still is under
+                ``rest``.
             labels: (H, W) int32 label map of this frame.
             cell: (w, h) px of one grid cell.
             moving: ids of the MotionBits that move now.
@@ -209,7 +211,7 @@ class Arrivals:
         unfollowed = self.stirred & self.known & (labels == 0) & ~candidate
         searched = candidate | unfollowed
         # what stands still, once for the three searches
-        at_rest = cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW)) < self.rest
+        at_rest = change < self.rest
         found = []
         if searched.any():
             # what looks unlike the remembered static world and stands still, once for

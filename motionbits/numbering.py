@@ -182,6 +182,9 @@ class ShownNumbers:
         self._last = {i: numbers[r] for i, r in rep.items() if r in numbers}
         for i in self._last:
             self._earlier.pop(i, None)
-        numbered = group_map(shown, numbers)
-        self._recent.append((numbered, label_areas(numbered)))
+        # the numbers are one-to-one over the marks: the areas are the marks' own
+        numbered_areas = np.zeros(max(numbers.values(), default=0) + 1, shown_areas.dtype)
+        numbered_areas[list(numbers.values())] = shown_areas[list(numbers)]
+        numbered_areas[0] = shown_areas[0]
+        self._recent.append((group_map(shown, numbers), numbered_areas))
         return numbers, next_id

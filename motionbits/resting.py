@@ -57,13 +57,14 @@ class RestingMarks:
 
     def __init__(self) -> None:
         self._shown: np.ndarray | None = None  # (H, W) int32 last shown label map
+        self._areas: np.ndarray | None = None  # its label_areas (None: to be counted)
         self._rgb: np.ndarray | None = None  # (H, W, 3) uint8 the frame under it
 
     def follow(self, world: np.ndarray) -> None:
         """Carry the memory to the current frame of a moving camera (``world``, (H, W, 2)
         float32, ``CameraMotion.world``)."""
         if self._shown is not None:
-            self._shown = follow_ids(self._shown, world)
+            self._shown, self._areas = follow_ids(self._shown, world), None
             self._rgb = follow_look(self._rgb, world)
 
     def hold(self, shown: np.ndarray, rgb: np.ndarray, state: np.ndarray,
@@ -82,9 +83,10 @@ class RestingMarks:
             (H, W) int32 label map (``shown`` itself where no mark is held).
         """
         out = shown
+        now_shown = label_areas(shown)
         if self._shown is not None and self._shown.shape == shown.shape:
             before = self._shown
-            was_shown, now_shown = label_areas(before), label_areas(shown)
+            was_shown = label_areas(before) if self._areas is None else self._areas
             hidden = sorted(i for i in resting if i < was_shown.size and was_shown[i]
                             and (i >= now_shown.size or not now_shown[i]))
             boxes = label_boxes(before) if hidden else []
@@ -103,6 +105,7 @@ class RestingMarks:
                     out = shown.copy()
                 out[box][was & (out[box] == 0)] = label
         self._shown, self._rgb = out, rgb.copy()
+        self._areas = now_shown if out is shown else label_areas(out)
         return out
 
 

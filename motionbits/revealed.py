@@ -66,6 +66,13 @@ def _color_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return cv2.max(cv2.max(r, g), b_)
 
 
+def grey_change(cur_gray: np.ndarray, prev_gray: np.ndarray) -> np.ndarray:
+    """(H, W) float32 ``WINDOW``-mean absolute change of grey level between two (H, W)
+    float32 frames: where it is small, a pixel stands still (:meth:`StaticMemory.update`,
+    :meth:`motionbits.arrivals.Arrivals.find`)."""
+    return cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW))
+
+
 #: (1, 3) float32: :func:`brightness` as OpenCV's per-pixel matrix transform
 _CHANNEL_SUM = np.ones((1, 3), np.float32)
 
@@ -369,14 +376,16 @@ class StaticMemory:
         if len(ids):
             self.label[np.isin(self.label, ids)] = 0
 
-    def update(self, cur: np.ndarray, cur_gray: np.ndarray, prev_gray: np.ndarray,
+    def update(self, cur: np.ndarray, cur_gray: np.ndarray, change: np.ndarray,
                standing: np.ndarray, labels: np.ndarray) -> np.ndarray | None:
         """Fold in the current frame (after :meth:`observe`; nothing if that returned
         None).
 
         Args:
             cur: (H, W, 3) uint8 current RGB frame.
-            cur_gray, prev_gray: (H, W) float32 grey frames.
+            cur_gray: (H, W) float32 its grey levels.
+            change: (H, W) float32 grey change since the last frame (:func:`grey_change`);
+                a pixel is seen still only where it is under ``tolerance``.
             standing: (H, W) bool, seen standing still now
                 (:func:`motionbits.merging.standing_still`).
             labels: (H, W) int32 this frame's MotionBit ids, remembered with the look of
@@ -389,8 +398,7 @@ class StaticMemory:
         if self._difference is None:
             return None
         self.was_covered |= self._difference > self.covered
-        calm = standing & (cv2.blur(cv2.absdiff(cur_gray, prev_gray), (WINDOW, WINDOW))
-                        < self.tolerance)
+        calm = standing & (change < self.tolerance)
         # in place; np.copyto with a broadcast ``where`` is ~100x slower
         cv2.copyTo(cur, calm.view(np.uint8), self.color)
         cv2.copyTo(cur_gray, calm.view(np.uint8), self.gray)

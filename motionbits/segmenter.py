@@ -53,7 +53,7 @@ from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
 from motionbits.resting import RestingMarks
 from motionbits.retirement import APART_CELLS, Origin, moved_once, retire, retire_shadows
-from motionbits.revealed import StaticMemory, carry_at_rest
+from motionbits.revealed import StaticMemory, carry_at_rest, grey_change
 from motionbits.second_thread import Task, second_thread
 from motionbits.setdown import SetDown
 from motionbits.shadows import cast_shadows, shadow_map, trim_shadows
@@ -406,7 +406,7 @@ class MotionBitsSegmenter:
         with self._stage("masks"):
             # computed only if some cluster is a candidate for a new MotionBit
             win = max(EVIDENCE_WINDOW, int(round(max(grid.cell))) | 1)
-            still, revealed = looked.result()
+            still, revealed, change = looked.result()
             # births only (computed once, if a cluster asks); under a moving camera a birth
             # must beat the static world's model given its error
             evidence = cache(lambda: motion_gain(
@@ -476,7 +476,7 @@ class MotionBitsSegmenter:
                 self._cuts.follow(world)
                 self._rest_marks.follow(world)
             labels, held, born, self._next_id = self._arrivals.place(
-                labels, self._arrivals.find(cur, cur_g, prev_g, labels, grid.cell, moving,
+                labels, self._arrivals.find(cur, change, labels, grid.cell, moving,
                                             self._first_look),
                 moving, int(round(max(grid.cell))), self._next_id)
             earned = earned | held
@@ -526,7 +526,7 @@ class MotionBitsSegmenter:
             self._prev, self._prev_gray = cur, cur_g
             # the stream's memories brought up to date on the second thread, while this one
             # makes the masks shown up to their completion (the first step that reads them)
-            remembered = self._helper.submit(self._remember, cur, cur_g, prev_g, labels,
+            remembered = self._helper.submit(self._remember, cur, cur_g, change, labels,
                                              speed, reliable)
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low) -- those a shown MotionBit reports; on the second
@@ -598,7 +598,7 @@ class MotionBitsSegmenter:
         result.timings = dict(self._timings)
         return result
 
-    def _remember(self, cur: np.ndarray, cur_g: np.ndarray, prev_g: np.ndarray,
+    def _remember(self, cur: np.ndarray, cur_g: np.ndarray, change: np.ndarray,
                   labels: np.ndarray, speed: np.ndarray, reliable: np.ndarray
                   ) -> tuple[tuple[tuple[slice, slice], np.ndarray] | None, np.ndarray | None,
                              np.ndarray]:
@@ -610,7 +610,7 @@ class MotionBitsSegmenter:
         standing = standing_still(speed, reliable, self.config.move_threshold)
         # before the memory moves on
         shadows = cast_shadows(self._memory, cur, labels, self._first_look)
-        calm = self._memory.update(cur, cur_g, prev_g, standing, labels)
+        calm = self._memory.update(cur, cur_g, change, standing, labels)
         if calm is not None:
             self._arrivals.update(cur, calm, labels, reliable & ~standing)
             self._first_look.update(cur, calm, labels)
@@ -626,16 +626,20 @@ class MotionBitsSegmenter:
         self._still = seen_still(still_seen, remembered.result()[2], self.frame_index)
 
     def _static_look(self, cur: np.ndarray, cur_g: np.ndarray, prev_g: np.ndarray,
-                     world: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+                     world: np.ndarray | None
+                     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """How far "nothing moved" misses each pixel ((h, w) float32 grey levels) -- also
         when only the light changed on it, and lowered where the static world is seen again
-        after a body uncovered it -- and those revealed pixels ((h, w) bool; None: the
-        memory is off). Under a moving camera the memory follows the static world's model
-        (``world``) first. Writes only the static world's memory."""
+        after a body uncovered it -- those revealed pixels ((h, w) bool; None: the memory
+        is off) and the grey change itself (:func:`motionbits.revealed.grey_change`, read
+        where the memories look for what stands still). Under a moving camera the memory
+        follows the static world's model (``world``) first. Writes only the static world's
+        memory."""
         cfg = self.config
         still = (static_residual(cur_g, prev_g, cfg.relight_sigma * max(self._grid.cell))
                  if cfg.relight_sigma else np.abs(cur_g - prev_g))
-        return still, self._memory.observe(cur, cur_g, still, world)
+        return (still, self._memory.observe(cur, cur_g, still, world),
+                grey_change(cur_g, prev_g))
 
     def _static_cost(self, looked: Future, flow: np.ndarray, gradient: np.ndarray,
                      prior: np.ndarray, prior_valid: np.ndarray, earned: np.ndarray
@@ -645,7 +649,7 @@ class MotionBitsSegmenter:
         :meth:`_static_look`'s answer (``looked``: done, as the second thread runs its
         tasks in order). Reads and writes none of the stream's state."""
         cfg = self.config
-        still, revealed = looked.result()
+        still, revealed, _ = looked.result()
         speed = cv2.magnitude(flow[..., 0], flow[..., 1])
         return speed, static_cost(speed, gradient, still, prior, prior_valid, earned,
                                   flow_texture=cfg.flow_texture, bonus=cfg.prior_bonus,

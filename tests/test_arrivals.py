@@ -9,6 +9,7 @@ import pytest
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.arrivals import Arrivals
 from motionbits.completion import FirstLook
+from motionbits.revealed import grey_change
 from motionbits.setdown import SetDown
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
@@ -44,7 +45,8 @@ def _memory_after_a_pass(background: np.ndarray, parent: int = 7) -> Arrivals:
 def _find(memory: Arrivals, frame: np.ndarray, labels: np.ndarray | None = None,
           moving: set[int] = frozenset()):
     labels = np.zeros(frame.shape[:2], np.int32) if labels is None else labels
-    return memory.find(frame, _gray(frame), _gray(frame), labels, CELL, moving)
+    gray = _gray(frame)
+    return memory.find(frame, grey_change(gray, gray), labels, CELL, moving)
 
 
 def test_a_body_at_rest_where_the_table_was_is_found_with_the_motionbit_that_covered_it():
@@ -122,7 +124,7 @@ def test_a_body_seen_moving_that_a_motionbit_only_grazed_is_found_alone():
     gray = _gray(now)
 
     def find(arrivals: Arrivals, labels: np.ndarray, first: FirstLook | None = first_look):
-        return arrivals.find(now, gray, gray, labels, CELL, set(), first)
+        return arrivals.find(now, grey_change(gray, gray), labels, CELL, set(), first)
 
     (box, piece, parent), = find(memory(True), labels)
     found = np.zeros(labels.shape, bool)
@@ -150,7 +152,8 @@ def _first_look_then(first: np.ndarray, now: np.ndarray, labels: np.ndarray | No
     memory.update(first, np.zeros(labels.shape, bool), labels, seen_moving)
     memory.update(now, np.ones(labels.shape, bool), labels, np.zeros(labels.shape, bool))
     gray = _gray(now)
-    return [memory.find(now, gray, gray, labels, CELL, set(), first_look) for _ in range(2)]
+    return [memory.find(now, grey_change(gray, gray), labels, CELL, set(), first_look)
+            for _ in range(2)]
 
 
 def test_a_body_the_memory_took_for_the_table_is_found_against_the_first_look():

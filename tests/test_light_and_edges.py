@@ -12,7 +12,7 @@ from motionbits.evidence import gradient_magnitude, static_residual
 from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import hide_edgeless, snap_to_edges, trim_flat_background
 from motionbits.retirement import OLD_SHADOW_SHARE, SHADOW_AGE, SHADOW_SHARE, retire_shadows
-from motionbits.revealed import StaticMemory
+from motionbits.revealed import StaticMemory, grey_change
 from motionbits.shadows import BODY_SHARE, cast_shadows, trim_shadows
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 
@@ -125,7 +125,7 @@ def _remembered(base: np.ndarray, labels: np.ndarray | None = None) -> StaticMem
     memory = StaticMemory(SIZE, tolerance=10.0, covered=20.0)
     gray = _gray(base)
     memory.observe(base, gray, np.zeros(SIZE, np.float32))
-    memory.update(base, gray, gray, np.ones(SIZE, bool),
+    memory.update(base, gray, grey_change(gray, gray), np.ones(SIZE, bool),
                   np.zeros(SIZE, np.int32) if labels is None else labels)
     return memory
 

@@ -13,7 +13,7 @@ from motionbits.merging import (OUTWEIGH, MotionBitGroups, apply_joins, drop_see
                                 join_convex, observe_touching, seen_still, standing_still,
                                 touching_pairs)
 from motionbits.nodes import NodeGrid
-from motionbits.revealed import StaticMemory
+from motionbits.revealed import StaticMemory, grey_change
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
 from motionbits.twists import rigid_matrix
 
@@ -422,7 +422,8 @@ def test_static_memory_reveals_background_seen_again_after_it_was_covered():
         if revealed is not None:  # lowered to the residual against the memory there
             assert (residual[revealed] < 1e-3).all()
             assert (residual[~revealed] == np.abs(gray[0] - gray[1])[~revealed]).all()
-        memory.update(cur, *gray, standing, np.zeros(standing.shape, np.int32))
+        memory.update(cur, gray[0], grey_change(*gray), standing,
+                      np.zeros(standing.shape, np.int32))
         return revealed
 
     step(table, table)  # seen standing still
@@ -462,7 +463,8 @@ def test_static_memory_follows_a_moving_camera():
         gray = [f.mean(axis=2, dtype=np.float32) for f in (cur, prev)]
         residual = np.abs(gray[0] - gray[1])
         revealed = memory.observe(cur, gray[0], residual, world)
-        memory.update(cur, *gray, standing, np.zeros(standing.shape, np.int32))
+        memory.update(cur, gray[0], grey_change(*gray), standing,
+                      np.zeros(standing.shape, np.int32))
         return revealed
 
     step(view[0], view[0])  # seen standing still
@@ -603,12 +605,14 @@ def test_static_memory_gives_ids_back_only_to_bodies_that_stand_still():
     labels[10:30, 10:30] = 5
     memory = StaticMemory(table.shape[:2], tolerance=10.0, covered=20.0)
     memory.observe(table, gray, np.zeros_like(gray))
-    memory.update(table, gray, gray, everywhere, labels)  # seen still, inside 5
+    memory.update(table, gray, grey_change(gray, gray), everywhere,
+                  labels)  # seen still, inside 5
     hand = table.copy()
     hand[5:35, 5:35] = 40  # something passes in front
     hand_gray = hand.mean(axis=2, dtype=np.float32)
     memory.observe(hand, hand_gray, np.abs(hand_gray - gray))
-    memory.update(hand, hand_gray, gray, ~(labels > 0), np.zeros_like(labels))
+    memory.update(hand, hand_gray, grey_change(hand_gray, gray), ~(labels > 0),
+                  np.zeros_like(labels))
     revealed = memory.observe(table, gray, np.abs(gray - hand_gray))
     nothing = np.zeros_like(labels)
     back, given = memory.restore(nothing, revealed, [])
