@@ -22,10 +22,10 @@ from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
 
 __all__ = ["fit_cluster_motions", "StaticCost", "static_cost", "assign_pixels", "fill_holes",
-           "remove_specks", "drop_labels", "hide_small", "hide_edgeless", "outline_gradient", "snap_to_edges",
-           "trim_flat_background", "flat_looks", "SPECK_CELLS", "EDGELESS_GRADIENT",
-           "HALO_FLAT_GRADIENT",
-           "HALO_MASK_SHARE", "hide_thin", "THIN_SHARE", "THIN_PIECE_SHARE"]
+           "remove_specks", "drop_labels", "hide_small", "hide_edgeless", "outline_gradient",
+           "snap_to_edges", "trim_flat_background", "flat_looks", "SPECK_CELLS",
+           "EDGELESS_GRADIENT", "HALO_FLAT_GRADIENT", "HALO_MASK_SHARE", "hide_thin",
+           "THIN_SHARE", "THIN_PIECE_SHARE"]
 
 #: The refit of a cluster's motion keeps nodes within this many times the RANSAC inlier
 #: threshold, or this many times the median residual if that is larger ...

@@ -10,11 +10,11 @@ from motionbits.boxes import label_areas, label_boxes, nonzero_box, pieces_holdi
 from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
-from motionbits.masks import _support_box
+from motionbits.masks import _support_box, static_cost
 from motionbits.merging import touching_pairs
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.records import twist_sources
-from motionbits.revealed import light_change
+from motionbits.revealed import brightness, light_change
 
 
 def _blobs(rng, shape=(90, 120), n=4):
@@ -221,3 +221,43 @@ def test_support_box_is_the_dilated_node_mask_upsampled():
         ys, xs = np.nonzero(full)
         assert (rows, cols) == (slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1))
         np.testing.assert_array_equal(inside, full[rows, cols] > 0)
+
+
+def test_brightness_is_the_channel_sum_on_images_views_and_pixel_lists():
+    rng = np.random.default_rng(3)
+    image = rng.integers(0, 256, (60, 80, 3), np.uint8)
+    for a in (image, image[5:50, 7:71], image[:, :1], image[4:5], image[image[..., 0] > 100]):
+        expected = a.astype(np.float32).sum(axis=-1)
+        got = brightness(a)
+        assert got.dtype == np.float32 and got.shape == a.shape[:-1]
+        np.testing.assert_array_equal(got, expected)
+    floats = image.astype(np.float32) / 7
+    np.testing.assert_array_equal(brightness(floats),
+                                  floats[..., 0] + floats[..., 1] + floats[..., 2])
+
+
+def test_static_cost_weighs_the_flow_by_texture_and_credits_the_background():
+    """"Nothing moved" costs a textured pixel the flow's full length, a flat one none of it,
+    and a revealed one only its photometric term; the background keeps the prior's credit
+    where no carried label, or one its motion never earned, holds the pixel."""
+    shape = (20, 40)
+    speed = np.full(shape, 5.0, np.float32)
+    gradient = np.zeros(shape, np.float32)
+    gradient[:, 20:] = 8.0  # the right half textured (over flow_texture)
+    still = np.full(shape, 10.0, np.float32)
+    revealed = np.zeros(shape, bool)
+    revealed[:, 30:] = True
+    prior = np.zeros(shape, np.int32)
+    prior[:10] = 3  # the top half carried a label ...
+    valid = np.ones(shape, bool)
+    earned = np.zeros(shape, bool)
+    earned[:10, :10] = True  # ... which its motion earned at the top left only
+    cost = static_cost(speed, gradient, still, prior, valid, earned, flow_texture=4.0,
+                       bonus=0.35, photo_weight=0.1, revealed=revealed)
+    np.testing.assert_allclose(cost.cost[:, :20], 1.0)  # flat: the photometric term only
+    np.testing.assert_allclose(cost.cost[:, 20:30], 6.0)  # textured: + the flow's 5 px
+    np.testing.assert_allclose(cost.cost[:, 30:], 1.0)  # revealed: no flow term
+    np.testing.assert_allclose(cost.credit, 0.35)
+    np.testing.assert_allclose(cost.best[:10, :10], cost.cost[:10, :10])  # earned: no credit
+    np.testing.assert_allclose(cost.best[:10, 10:], cost.cost[:10, 10:] - 0.35)
+    np.testing.assert_allclose(cost.best[10:], cost.cost[10:] - 0.35)  # no carried label
