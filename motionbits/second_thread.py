@@ -1,9 +1,10 @@
 """The segmenter's second thread: work that OpenCV or numpy does without the GIL, run
 beside the main thread's (the camera's motion while the labels are carried; the residual
-of "nothing moved", the static world's memory and the frame's flat regions while the
-twists are fitted and clustered; the memories, then the reported twists' refinement,
-while the masks shown are made -- a :class:`Task` the main thread runs itself if it
-needs the result before the second thread started it).
+of "nothing moved", the static world's memory, the frame's flat regions and what "nothing
+moved" costs at each pixel while the twists are fitted and clustered; the memories, the
+reported twists' refinement -- a :class:`Task` the main thread runs itself if it needs
+the result before the second thread started it -- and the label history's fold while the
+masks shown are made).
 
 Where OpenCV may use one thread only (``cv2.setNumThreads(1)``, as each worker of
 ``motionbits batch`` is set: the pool of processes fills the cores), the work runs inline

@@ -103,7 +103,8 @@ MIN_SHOWN_CELLS = 8
 #: their history carried, and where a carried label still holds -- and, on the second
 #: thread meanwhile (:mod:`motionbits.second_thread`), the forward-backward error and the
 #: camera's motion, waited for. "bookkeeping" makes the masks shown while the second
-#: thread brings the memories up to date and refines the reported twists.
+#: thread brings the memories up to date, refines the reported twists and folds the
+#: label history.
 STAGES = ("resize", "flow", "carry", "twists", "graph", "propagation", "clustering", "masks",
           "merging", "bookkeeping")
 
