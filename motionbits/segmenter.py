@@ -368,7 +368,7 @@ class MotionBitsSegmenter:
                                                   gradient_gain=cfg.carry_gradient))
             # and what "nothing moved" costs at each pixel, for the masks
             costs = self._helper.submit(self._static_cost, looked, flow_m, gradient, prior,
-                                        prior_valid, earned)
+                                        prior_valid, earned, reliable)
             prior_nodes = np.where(prior_valid[ix[:, 1], ix[:, 0]], prior[ix[:, 1], ix[:, 0]], 0)
             motions = fit_local_motions(
                 pts, back_pts, grid.neighbors, reliability, cfg.ransac_threshold,
@@ -443,7 +443,7 @@ class MotionBitsSegmenter:
                     int(round(APART_CELLS * max(grid.cell))), cfg.retire_margin,
                     cfg.carry_tolerance))))
             carried_earned = earned
-            speed, static = costs.result()
+            speed, standing, static = costs.result()
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g, static, prior,
                 prior_valid, earned, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
@@ -528,7 +528,7 @@ class MotionBitsSegmenter:
             # the stream's memories brought up to date on the second thread, while this one
             # makes the masks shown up to their completion (the first step that reads them)
             remembered = self._helper.submit(self._remember, cur, cur_g, change, labels,
-                                             speed, reliable)
+                                             standing, reliable)
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low) -- those a shown MotionBit reports; on the second
             # thread after the memories, unless a flat link's test asks for them first
@@ -536,7 +536,7 @@ class MotionBitsSegmenter:
             refined = Task(self._helper, refine_moving_motions, cur_g, prev_g, labels, ids,
                            thetas, trans, moving & set(source.values()))
             # then what only the next frame reads: the label history, where pixels stood
-            folded = self._helper.submit(self._fold, remembered, labels, raw, still_seen)
+            folded = self._helper.submit(self._fold, labels, raw, still_seen, standing)
             # the masks shown (one per group) take the flat links that move along
             # themselves and are trimmed to the image's edges; the state keeps the motion's
             # masks (trimming them would compound from frame to frame)
@@ -562,7 +562,7 @@ class MotionBitsSegmenter:
             # only where its outline stops inside its body) -- the small ones last, where
             # the others left room, and only those that then cover MIN_SHOWN_CELLS
             moving_marks = {rep[i] for i in moving if rep.get(i)}  # shown labels moving now
-            shadows, calm, _ = remembered.result()
+            shadows, calm = remembered.result()
             first_look = self._first_look if calm is not None else None
             shown = complete_masks(hide_small(pieces, min_shown), cur, moving_marks, gradient,
                                    self._cuts, first_look,
@@ -600,31 +600,27 @@ class MotionBitsSegmenter:
         return result
 
     def _remember(self, cur: np.ndarray, cur_g: np.ndarray, change: np.ndarray,
-                  labels: np.ndarray, speed: np.ndarray, reliable: np.ndarray
-                  ) -> tuple[tuple[tuple[slice, slice], np.ndarray] | None, np.ndarray | None,
-                             np.ndarray]:
+                  labels: np.ndarray, standing: np.ndarray, reliable: np.ndarray
+                  ) -> tuple[tuple[tuple[slice, slice], np.ndarray] | None, np.ndarray | None]:
         """Bring the static world's memory up to this frame (and the arrivals' and the
-        first look's). Returns the cast shadows the memory saw before it moved on
-        (:func:`motionbits.shadows.cast_shadows`), the pixels it took in (None: the
-        memory is off) and where the frame stands still ((h, w) bool,
-        :func:`motionbits.merging.standing_still`). Writes only those memories."""
-        standing = standing_still(speed, reliable, self.config.move_threshold)
+        first look's), given where the frame stands still (``standing``, (h, w) bool).
+        Returns the cast shadows the memory saw before it moved on
+        (:func:`motionbits.shadows.cast_shadows`) and the pixels it took in (None: the
+        memory is off). Writes only those memories."""
         # before the memory moves on
         shadows = cast_shadows(self._memory, cur, labels, self._first_look)
         calm = self._memory.update(cur, cur_g, change, standing, labels)
         if calm is not None:
             self._arrivals.update(cur, calm, labels, reliable & ~standing)
             self._first_look.update(cur, calm, labels)
-        return shadows, calm, standing
+        return shadows, calm
 
-    def _fold(self, remembered: Future, labels: np.ndarray, raw: np.ndarray,
-              still_seen: np.ndarray) -> None:
+    def _fold(self, labels: np.ndarray, raw: np.ndarray, still_seen: np.ndarray,
+              standing: np.ndarray) -> None:
         """Fold this frame's labels into the label history and note where each pixel was
-        last seen standing still (``remembered``: :meth:`_remember`'s answer, done: the
-        second thread runs its tasks in order). Only the next frame reads them; writes
-        only those."""
+        last seen standing still. Only the next frame reads them; writes only those."""
         self._temporal.fold(raw, labels, margin=int(np.ceil(max(self._grid.cell))))
-        self._still = seen_still(still_seen, remembered.result()[2], self.frame_index)
+        self._still = seen_still(still_seen, standing, self.frame_index)
 
     def _static_look(self, cur: np.ndarray, cur_g: np.ndarray, prev_g: np.ndarray,
                      world: np.ndarray | None
@@ -643,18 +639,20 @@ class MotionBitsSegmenter:
                 grey_change(cur_g, prev_g))
 
     def _static_cost(self, looked: Future, flow: np.ndarray, gradient: np.ndarray,
-                     prior: np.ndarray, prior_valid: np.ndarray, earned: np.ndarray
-                     ) -> tuple[np.ndarray, StaticCost]:
-        """How far each pixel moves by the camera-compensated ``flow`` ((h, w) float32 px)
-        and what "nothing moved" costs there (:func:`motionbits.masks.static_cost`), given
-        :meth:`_static_look`'s answer (``looked``: done, as the second thread runs its
-        tasks in order). Reads and writes none of the stream's state."""
+                     prior: np.ndarray, prior_valid: np.ndarray, earned: np.ndarray,
+                     reliable: np.ndarray) -> tuple[np.ndarray, np.ndarray, StaticCost]:
+        """How far each pixel moves by the camera-compensated ``flow`` ((h, w) float32 px),
+        where the frame stands still ((h, w) bool, :func:`motionbits.merging.standing_still`)
+        and what "nothing moved" costs at each pixel (:func:`motionbits.masks.static_cost`),
+        given :meth:`_static_look`'s answer (``looked``: done, as the second thread runs
+        its tasks in order). Reads and writes none of the stream's state."""
         cfg = self.config
         still, revealed, _ = looked.result()
         speed = cv2.magnitude(flow[..., 0], flow[..., 1])
-        return speed, static_cost(speed, gradient, still, prior, prior_valid, earned,
-                                  flow_texture=cfg.flow_texture, bonus=cfg.prior_bonus,
-                                  photo_weight=cfg.photo_weight, revealed=revealed)
+        return (speed, standing_still(speed, reliable, cfg.move_threshold),
+                static_cost(speed, gradient, still, prior, prior_valid, earned,
+                            flow_texture=cfg.flow_texture, bonus=cfg.prior_bonus,
+                            photo_weight=cfg.photo_weight, revealed=revealed))
 
     def _world_motion(self, flow_fwd: np.ndarray, flow_back: np.ndarray,
                       back_maps: tuple[np.ndarray, np.ndarray], cur: np.ndarray):
