@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from motionbits.apart import GAP_CELLS, split_apart
 from motionbits.aperture import (carried_joins, flat_link_candidates, half_colour_gradient,
                                  join_flat_links)
 from motionbits.arrivals import Arrivals
@@ -586,6 +587,13 @@ class MotionBitsSegmenter:
             # marks at rest side by side that make one convex body are one (its faces,
             # marked apart and set down: nothing moves to tell)
             shown, rep = apply_joins(shown, rep, join_convex(shown, moving_marks, self._groups))
+            # one mark, one connected body: the pieces of a mark far apart are shown apart
+            split, rep, source, self._next_id = split_apart(
+                shown, with_links, rep, source, self._next_id,
+                gap=int(round(GAP_CELLS * max(grid.cell))), min_area=min_shown)
+            if split is not shown:
+                shown = split
+                source = {**source, **twist_sources(node_ids, ids, rep)}
             # each mark under the number its body was shown under (the state keeps the
             # groups' representatives)
             numbers, self._next_id = self._numbers.assign(shown, with_links, rep,
