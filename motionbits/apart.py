@@ -50,21 +50,22 @@ def split_apart(shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
             their mark).
 
     Returns:
-        (shown, rep, source, next_id): every piece apart other than each mark's largest
+        (shown, rep, fresh, next_id): every piece apart other than each mark's largest
         under the id of the MotionBit that holds most of it (``rep`` maps it and the
-        members that lie mostly in it there), or under a fresh label (``source`` gives
-        it the mark's twist; ``next_id`` moves past it) where that MotionBit is the
-        mark's own, another mark's, or none. The inputs themselves (the same objects)
-        where nothing falls apart; they are never written.
+        members that lie mostly in it there), or under a fresh label where that
+        MotionBit is the mark's own, another mark's, or none: ``fresh`` maps each fresh
+        label to the member whose twist its mark reported (``source``), and ``next_id``
+        moves past them. ``shown`` and ``rep`` themselves (the same objects) where
+        nothing falls apart; the inputs are never written.
     """
     areas = label_areas(shown)
     marks = np.flatnonzero(areas[1:] >= 2 * min_area) + 1
     if not marks.size:
-        return shown, rep, source, next_id
+        return shown, rep, {}, next_id
     boxes = label_boxes(shown, int(marks[-1]))
     used = set((np.flatnonzero(areas[1:]) + 1).tolist())  # the labels shown
     square = np.ones((gap + 1, gap + 1), np.uint8)
-    out, new_rep, new_source, state_areas = shown, rep, source, None
+    out, new_rep, fresh, state_areas = shown, rep, {}, None
     for mark in marks.tolist():
         box = boxes[mark - 1]
         mine = shown[box] == mark
@@ -79,7 +80,7 @@ def split_apart(shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
         if large.size < 2:
             continue
         if out is shown:
-            out, new_rep, new_source = shown.copy(), dict(rep), dict(source)
+            out, new_rep = shown.copy(), dict(rep)
             state_areas = label_areas(state)
         held = state[box]
         for k in large[large != int(np.argmax(sizes))].tolist():
@@ -89,8 +90,8 @@ def split_apart(shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
             owner = int(counts.argmax())
             if owner == 0 or owner in used:  # no MotionBit of its own to show it under
                 out[box][piece] = next_id
-                if mark in new_source:
-                    new_source[next_id] = new_source[mark]
+                if mark in source:
+                    fresh[next_id] = source[mark]
                 used.add(next_id)
                 next_id += 1
                 continue
@@ -100,4 +101,4 @@ def split_apart(shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
                 if new_rep.get(i) == mark and 2 * counts[i] > state_areas[i]:
                     new_rep[i] = owner
             new_rep[owner] = owner
-    return out, new_rep, new_source, next_id
+    return out, new_rep, fresh, next_id

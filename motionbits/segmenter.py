@@ -588,12 +588,12 @@ class MotionBitsSegmenter:
             # marked apart and set down: nothing moves to tell)
             shown, rep = apply_joins(shown, rep, join_convex(shown, moving_marks, self._groups))
             # one mark, one connected body: the pieces of a mark far apart are shown apart
-            split, rep, source, self._next_id = split_apart(
+            split, rep, fresh, self._next_id = split_apart(
                 shown, with_links, rep, source, self._next_id,
                 gap=int(round(GAP_CELLS * max(grid.cell))), min_area=min_shown)
             if split is not shown:
                 shown = split
-                source = {**source, **twist_sources(node_ids, ids, rep)}
+                source = {**twist_sources(node_ids, ids, rep), **fresh}
             # each mark under the number its body was shown under (the state keeps the
             # groups' representatives)
             numbers, self._next_id = self._numbers.assign(shown, with_links, rep,
