@@ -21,10 +21,9 @@ body".
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 
-from motionbits.boxes import label_areas, label_boxes
+from motionbits.boxes import label_areas, label_pieces
 
 __all__ = ["GAP_CELLS", "split_apart"]
 
@@ -63,43 +62,32 @@ def split_apart(shown: np.ndarray, state: np.ndarray, rep: dict[int, int],
     marks = np.flatnonzero(areas[1:] >= 2 * min_area) + 1
     if not marks.size:
         return shown, rep, {}, next_id
-    boxes = label_boxes(shown, int(marks[-1]))
     used = set((np.flatnonzero(areas[1:]) + 1).tolist())  # the labels shown
-    square = np.ones((gap + 1, gap + 1), np.uint8)
     out, new_rep, fresh, state_areas = shown, rep, {}, None
-    for mark in marks.tolist():
-        box = boxes[mark - 1]
-        mine = shown[box] == mark
-        joined = cv2.dilate(mine.view(np.uint8), square) if gap else mine.view(np.uint8)
-        n, pieces = cv2.connectedComponents(joined, connectivity=8)
-        if n <= 2:
-            continue
-        pieces[~mine] = 0
-        sizes = np.bincount(pieces.ravel(), minlength=n)
-        sizes[0] = 0
-        large = np.flatnonzero(sizes >= min_area)
+    for p in label_pieces(shown, marks.tolist(), gap=gap):
+        large = np.flatnonzero(p.areas >= min_area)
         if large.size < 2:
             continue
         if out is shown:
             out, new_rep = shown.copy(), dict(rep)
             state_areas = label_areas(state)
-        held = state[box]
-        for k in large[large != int(np.argmax(sizes))].tolist():
-            piece = pieces == k
+        held = state[p.box]
+        for k in large[large != p.largest].tolist():
+            piece = p.pieces == k
             ids = held[piece]
             counts = np.bincount(ids[ids > 0], minlength=1)
             owner = int(counts.argmax())
             if owner == 0 or owner in used:  # no MotionBit of its own to show it under
-                out[box][piece] = next_id
-                if mark in source:
-                    fresh[next_id] = source[mark]
+                out[p.box][piece] = next_id
+                if p.label in source:
+                    fresh[next_id] = source[p.label]
                 used.add(next_id)
                 next_id += 1
                 continue
-            out[box][piece] = owner
+            out[p.box][piece] = owner
             used.add(owner)
             for i in np.flatnonzero(counts).tolist():
-                if new_rep.get(i) == mark and 2 * counts[i] > state_areas[i]:
+                if new_rep.get(i) == p.label and 2 * counts[i] > state_areas[i]:
                     new_rep[i] = owner
             new_rep[owner] = owner
     return out, new_rep, fresh, next_id

@@ -16,7 +16,7 @@ import numpy as np
 
 from motionbits.aperture import (FLAT_GRADIENT, flat_regions, ground_regions,
                                  half_colour_gradient, reaches_border)
-from motionbits.boxes import at_border, grow_box, label_areas, label_boxes
+from motionbits.boxes import at_border, grow_box, label_areas, label_boxes, label_pieces
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid, binary_fill_holes
 from motionbits.twists import kabsch_2d, rigid_matrix
@@ -283,18 +283,11 @@ def remove_specks(label_map: np.ndarray, min_area: int) -> np.ndarray:
     """Zero every connected piece of a label smaller than ``min_area`` px, except the
     largest piece of each label (a small body is still a body)."""
     out = label_map.copy()
-    for i, box in enumerate(label_boxes(label_map)):
-        if box is None:
-            continue
-        mask = (label_map[box] == i + 1).astype(np.uint8)
-        n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-        if n <= 2:
-            continue
-        areas = stats[1:, cv2.CC_STAT_AREA]
-        small = np.flatnonzero(areas < min_area) + 1
-        small = small[small != np.argmax(areas) + 1]
+    for p in label_pieces(label_map):
+        small = np.flatnonzero(p.areas < min_area)
+        small = small[(small != 0) & (small != p.largest)]
         if len(small):
-            out[box][np.isin(comp, small)] = 0
+            out[p.box][np.isin(p.pieces, small)] = 0
     return out
 
 
@@ -340,25 +333,20 @@ def hide_thin(label_map: np.ndarray, side: int) -> np.ndarray:
     square = np.ones((side, side), np.uint8)
     out = label_map
     thin = []
-    for i, box in enumerate(label_boxes(label_map), start=1):
-        if box is None:
-            continue
-        mark = (label_map[box] == i).view(np.uint8)
-        opened = cv2.morphologyEx(mark, cv2.MORPH_OPEN, square,
+    for p in label_pieces(label_map):
+        opened = cv2.morphologyEx(p.mark.view(np.uint8), cv2.MORPH_OPEN, square,
                                   borderType=cv2.BORDER_CONSTANT, borderValue=0)
-        n, pieces, stats, _ = cv2.connectedComponentsWithStats(mark, connectivity=8)
-        area = stats[:, cv2.CC_STAT_AREA]
-        kept = np.bincount(pieces[opened > 0], minlength=n)  # px each piece keeps
-        stripe = kept < THIN_PIECE_SHARE * area
-        stripe[[0, np.argmax(area[1:]) + 1]] = False  # the background; the largest piece
+        kept = np.bincount(p.pieces[opened > 0], minlength=len(p.areas))  # px each piece keeps
+        stripe = kept < THIN_PIECE_SHARE * p.areas
+        stripe[[0, p.largest]] = False  # the background; the largest piece
         if stripe.any():
             if out is label_map:
                 out = label_map.copy()
-            out[box][stripe[pieces]] = 0
+            out[p.box][stripe[p.pieces]] = 0
         left = ~stripe
         left[0] = False  # what is left of the mark
-        if kept[left].sum() < THIN_SHARE * area[left].sum():
-            thin.append(i)
+        if kept[left].sum() < THIN_SHARE * p.areas[left].sum():
+            thin.append(p.label)
     return drop_labels(out, thin)
 
 

@@ -6,7 +6,8 @@ import numpy as np
 from scipy import ndimage
 
 from motionbits.aperture import flat_regions, half_colour_gradient
-from motionbits.boxes import label_areas, label_boxes, nonzero_box, pieces_holding, run_counts
+from motionbits.boxes import (label_areas, label_boxes, label_pieces, nonzero_box, pieces_holding,
+                              run_counts)
 from motionbits.flow import nearest_maps, sample_maps, warp_nearest
 from motionbits.graph import project_past_max
 from motionbits.identity import refine_history
@@ -61,6 +62,37 @@ def test_pieces_holding_keeps_the_8_connected_pieces_with_a_seed():
     out = pieces_holding(mask, seeds)
     assert out[1:3, 1:3].all() and out[3, 3] and not out[5:7, 6:9].any()
     assert out.sum() == 5
+
+
+def test_label_pieces_are_scipys_connected_pieces_of_each_label():
+    rng = np.random.default_rng(5)
+    maps = [_blobs(rng, n=n) for n in (1, 4, 9) for _ in range(5)]
+    maps += [(rng.integers(0, 5, (23, 31)) * (rng.random((23, 31)) < 0.3)).astype(np.int32)]
+    eight = np.ones((3, 3), bool)
+    for labels in maps:
+        for gap in (0, 2):
+            seen = []
+            for p in label_pieces(labels, gap=gap):
+                seen.append(p.label)
+                assert p.box == ndimage.find_objects(labels)[p.label - 1]
+                np.testing.assert_array_equal(p.mark, labels[p.box] == p.label)
+                # (a dilation's pieces do not depend on where its square is anchored)
+                joined = (ndimage.binary_dilation(p.mark, np.ones((gap + 1, gap + 1), bool))
+                          if gap else p.mark)
+                expected, n = ndimage.label(joined, eight)
+                expected[~p.mark] = 0
+                assert len(p.areas) == n + 1 and p.areas[0] == 0
+                # the same pieces, up to their numbering
+                pairs = set(zip(p.pieces[p.mark].tolist(), expected[p.mark].tolist()))
+                assert len(pairs) == n == len({a for a, _ in pairs})
+                np.testing.assert_array_equal(p.areas, np.bincount(p.pieces[p.mark], minlength=n + 1)
+                                              * (np.arange(n + 1) > 0))
+                assert p.areas[p.largest] == p.areas.max()
+            assert seen == [i for i in range(1, labels.max() + 1) if (labels == i).any()]
+    some = maps[1]
+    present = [int(i) for i in np.unique(some) if i]
+    order = present[::-1] + [some.max() + 5]  # in the order asked; a label not present: none
+    assert [p.label for p in label_pieces(some, order)] == present[::-1]
 
 
 def test_label_areas_are_bincount():
