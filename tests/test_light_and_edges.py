@@ -102,6 +102,20 @@ def test_plain_dis_flow_is_opencvs_and_the_frame_cache_sees_in_place_changes():
     np.testing.assert_array_equal(moved, DISFlow()(shifted, b))
 
 
+def test_the_flow_of_a_pair_does_not_depend_on_the_calls_before():
+    """OpenCV's DIS object starts a call without an initial flow from the last initial
+    flow it was given (seen with opencv-python-headless 5.1): a backend that gave one
+    object both kinds of call would make a pair's flow depend on the stream's history."""
+    base = _texture(7)
+    a, b = base, np.roll(base, (2, 6), axis=(0, 1))
+    far = np.roll(base, 40, axis=1)  # another pair first, with large displacements
+    for normalize in (True, False):
+        fresh = DISFlow(normalize=normalize)(a, b)
+        used = DISFlow(normalize=normalize)
+        used(a, far), used(far, a), used(b, a)
+        np.testing.assert_array_equal(used(a, b), fresh)
+
+
 def _shadow_clip(n_frames: int = 12) -> list[np.ndarray]:
     base = _texture(5, scale=16)
     return [np.clip(base * _shadow((70 + 9 * t, 120), 50, 0.55)[..., None], 0, 255)
