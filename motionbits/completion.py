@@ -576,7 +576,8 @@ class FirstLook:
         self.look = follow_look(self.look, world)
         self.known = follow_known(self.known, world)
 
-    def as_first_seen(self, label_map: np.ndarray, rgb: np.ndarray) -> np.ndarray:
+    def as_first_seen(self, label_map: np.ndarray, rgb: np.ndarray,
+                      moved: Collection[int] = ()) -> np.ndarray:
         """Ids of the marks that stand where and as they were first seen: the first look
         knows ``FIRST_SEEN_KNOWN`` of the mark's pixels and at most ``FIRST_SEEN_CHANGED``
         of those look otherwise now (:meth:`changed`). Nothing moved there.
@@ -584,6 +585,10 @@ class FirstLook:
         Args:
             label_map: (H, W) int32 marks (0 = background).
             rgb: (H, W, 3) uint8 current frame.
+            moved: marks whose body is known to have moved since its birth (its own
+                motion explains its pixels better than the static world's,
+                :attr:`motionbits.retirement.Origin.moved`): never among them. A uniform
+                block nudged less than its size looks much as first seen.
 
         Returns:
             (K,) int64 ids, ascending.
@@ -596,6 +601,7 @@ class FirstLook:
         seen = np.bincount(labels[self.known[box].ravel()], minlength=area.size)
         candidate = (area > 0) & (seen >= FIRST_SEEN_KNOWN * area)
         candidate[0] = False
+        candidate[[i for i in moved if i < candidate.size]] = False
         if not candidate.any():
             return np.zeros(0, np.int64)
         differs = self._differs(rgb, box)

@@ -95,8 +95,9 @@ OUTWEIGH = 3
 
 #: Two marks at rest that touch are one body when their union fills at least this share of
 #: its convex hull (:func:`join_convex`): a block's top face and its sides, a cylinder's
-#: top and its side, shown as two marks once set down (round 43).
-CONVEX_SOLIDITY = 0.9
+#: top and its side, shown as two marks once set down (round 43: 0.9; round 58: 0.85,
+#: split blocks' pairs at 0.86-0.89 were left apart).
+CONVEX_SOLIDITY = 0.85
 #: ... and they share at least this share of the shorter of their two outlines (a corner
 #: of contact is not one body) ...
 CONVEX_BORDER = 0.1
@@ -211,14 +212,17 @@ def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGro
     """Pairs of marks at rest that are one body by their shape: they touch along at least
     ``CONVEX_BORDER`` of the shorter outline, the larger is at most ``CONVEX_AREA_RATIO``
     times the smaller, and together they fill ``CONVEX_SOLIDITY`` of their union's convex
-    hull. Each such pair not known to disagree (:meth:`MotionBitGroups.known`)
-    is recorded in ``groups`` as agreeing, so that later frames show them as one.
+    hull. Each such pair is joined, even if their motions disagreed before; one not known
+    to disagree (:meth:`MotionBitGroups.known`) is also recorded in ``groups`` as
+    agreeing, so that later frames show them as one.
 
     The faces of a body that its motion or its arrival marked apart (a block's top face
     and its sides, seen from above at an angle) stand still side by side once it is set
-    down: no motion tells them apart or together any more. Two bodies at rest side by
-    side rarely fill their union's hull (the rigid bodies of the generated tracks are
-    blocks, cylinders and balls; a shadow beside a block makes an L).
+    down: no motion tells them apart or together any more. Their marks may have
+    disagreed before, even for good: the mark that moved with a carried block still
+    moved (lowered) at the frame its side was found at rest beside it (round 58). Two
+    bodies at rest side by side rarely fill their union's hull (the rigid bodies of the
+    generated tracks are blocks, cylinders and balls; a shadow beside a block makes an L).
 
     Args:
         shown: (H, W) int32 marks shown, under their group labels (0 = none).
@@ -235,7 +239,7 @@ def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGro
     square = np.ones((3, 3), np.uint8)
     joined = []
     for a, b in sorted(touching_pairs(shown, 1)):
-        if a in moving or b in moving or groups.known(a, b):
+        if a in moving or b in moving:
             continue
         (ra, ca), (rb, cb) = boxes[a - 1], boxes[b - 1]
         sub = shown[min(ra.start, rb.start):max(ra.stop, rb.stop),

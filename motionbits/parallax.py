@@ -234,7 +234,10 @@ class ParallaxOnly:
     by itself leaves them at some frame (a body moved exactly along them is the blind spot
     of plane + parallax, docs/reading_the_paper.md, "Moving cameras", round 36). Per
     MotionBit this counts the frames at which an epipole was known and it moved measurably
-    (:func:`along_epipolar_lines`), and how many of those along the lines.
+    (:func:`along_epipolar_lines`), and how many of those along the lines. A MotionBit
+    found at rest where its body came to stand (:meth:`arrived`) moved by itself before
+    it was found, and is never parallax only (round 58: blocks knocked, found where they
+    stopped, then read moving along their lines through parallax, were hidden).
     """
 
     def __init__(self) -> None:
@@ -250,6 +253,12 @@ class ParallaxOnly:
             self._frames[i] = (measured + 1, lined + (how == ALONG))
             if how == OWN:
                 self._own.add(i)
+
+    def arrived(self, ids: Iterable[int]) -> None:
+        """The MotionBits ``ids`` were found at rest where their body had come to stand
+        (set down, or arrived: :class:`motionbits.setdown.SetDown`'s pieces): they moved
+        by themselves, whatever the camera's parallax does to them afterwards."""
+        self._own.update(int(i) for i in ids)
 
     def ids(self, present: Iterable[int]) -> set[int]:
         """Of the ids ``present``, those that moved along the epipolar lines at

@@ -67,11 +67,15 @@ class Origin:
         frame: (H, W) float32 grey frame before its birth (shared, never modified).
         body: (3, 3) accumulated backward motion of the MotionBit (current -> birth frame).
         world: (3, 3) accumulated backward motion of the static world.
+        moved: whether, at the last frame :func:`retire` judged it, its own motion
+            explained its pixels (within ``explained``) better than the static world's
+            did, by more than ``margin``: the body moved since its birth.
     """
 
     frame: np.ndarray
     body: np.ndarray
     world: np.ndarray
+    moved: bool = False
 
     def advance(self, body_step: np.ndarray, world_step: np.ndarray) -> None:
         """Compose one more frame's (3, 3) backward motions (current -> previous)."""
@@ -195,7 +199,9 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
     accumulated motion (:func:`origin_residuals`). Where no frame explains them (a body
     carried and set down: the fitted motion of a body lowered in depth drifts, and the
     static world shows what was there before it arrived) the MotionBit stays; the first
-    frame still explains background that an arm covered at a MotionBit's birth.
+    frame still explains background that an arm covered at a MotionBit's birth. Each
+    origin that stays records whether the MotionBit's own motion explained it better
+    (:attr:`Origin.moved`).
 
     Args:
         labels: (H, W) int32 label map of this frame.
@@ -240,6 +246,8 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         if world_res < explained and world_res - body_res < -margin:
             out = np.where(out == i, 0, out)
             del origins[i]
+        else:  # (False where either is NaN)
+            origin.moved = bool(body_res < explained and world_res - body_res > margin)
     return out, origins
 
 

@@ -485,6 +485,8 @@ class MotionBitsSegmenter:
             self._setdown.adopt(born, labels, grid.cell, moving)
             for i in self._setdown.pending:
                 self._spans.inherit(i, self._setdown.parent[i], self.frame_index - 1)
+            # (a body found where it came to rest moved by itself: never parallax only)
+            self._parallax.arrived(self._setdown.pending)
 
         with self._stage("merging"):
             self._spans.record(moving, self.frame_index)
@@ -577,10 +579,14 @@ class MotionBitsSegmenter:
             still_marks = {r for r in rep.values() if r} - moving_marks
             shown = self._rest_marks.hold(shown, cur, state, still_marks)
             # nothing moved where a mark stands as first seen (a static body marked through
-            # parallax or smeared flow), nor where a mark at rest shows the table a body
+            # parallax or smeared flow) -- unless its body's own motion since its birth
+            # explains it better than the static world (a block nudged less than its size
+            # looks much as first seen) -- nor where a mark at rest shows the table a body
             # first seen there has left
             if calm is not None:
-                shown = drop_labels(shown, self._first_look.as_first_seen(shown, cur))
+                moved = {rep[i] for i, origin in self._origins.items()
+                         if origin.moved and rep.get(i)}
+                shown = drop_labels(shown, self._first_look.as_first_seen(shown, cur, moved))
                 shown = drop_labels(shown, self._first_look.uncovered(shown, cur, still_marks))
             # stripes are not a body (the flow along a wood grain's lines)
             shown = hide_thin(shown, int(np.ceil(max(grid.cell))))

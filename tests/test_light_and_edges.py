@@ -322,7 +322,8 @@ def test_a_moving_shadow_leaves_no_mark_of_its_own(monkeypatch):
     assert max(inside_shadow(), default=0.0) < 0.6
     monkeypatch.setattr("motionbits.segmenter.trim_shadows", lambda shown, shadows: shown)
     assert max(inside_shadow(), default=0.0) < 0.6
-    monkeypatch.setattr(FirstLook, "as_first_seen", lambda self, labels, rgb: np.zeros(0, int))
+    monkeypatch.setattr(FirstLook, "as_first_seen",
+                        lambda self, labels, rgb, moved=(): np.zeros(0, int))
     assert max(inside_shadow()) > 0.9
 
 

@@ -330,3 +330,20 @@ def test_parallax_within_a_flow_error_of_the_lines_and_a_motion_of_its_own():
             assert along_epipolar_lines(p, residual, node_ids, [1, 2], e) == {1: ALONG, 2: OWN}
         parallax.observe(p, residual, node_ids, {1, 2}, e)
     assert parallax.ids([1, 2]) == {1}
+
+
+def test_a_body_found_where_it_came_to_rest_is_never_parallax_only():
+    """A block knocked, then found at rest where it stopped (a set-down piece, an
+    arrival), moves along its epipolar lines afterwards through its own parallax: its
+    motion of its own came before its MotionBit, which is not a static body's."""
+    rng = np.random.default_rng(6)
+    p = rng.uniform([0, 0], [W, H], (40, 2))
+    e = np.array([*E, 1.0])
+    node_ids = np.repeat([1, 2], 20)
+    tall = 0.08 * (p - E) + rng.normal(0, 0.02, (40, 2))
+    parallax = ParallaxOnly()
+    parallax.arrived([2])
+    for _ in range(PARALLAX_FRAMES + 2):
+        assert set(along_epipolar_lines(p, tall, node_ids, [1, 2], e).values()) == {ALONG}
+        parallax.observe(p, tall, node_ids, {1, 2}, e)
+    assert parallax.ids([1, 2]) == {1}

@@ -118,7 +118,16 @@ def test_retire_drops_a_motionbit_whose_pixels_did_not_move():
     moved = np.roll(prev, -5, axis=1)
     out, origins = retire(labels, {}, ids, thetas, trans, 1, None, prev, moved, 5.0)
     np.testing.assert_array_equal(out, labels)
-    assert set(origins) == {1}
+    assert set(origins) == {1} and origins[1].moved  # its own motion explains it
+    # the next frame it stands still: its origin still tells it moved since its birth
+    out, origins = retire(labels, origins, np.zeros(0, np.int64), np.zeros(0),
+                          np.zeros((0, 2)), 2, None, moved, moved.copy(), 5.0)
+    assert set(origins) == {1} and origins[1].moved
+    # a MotionBit whose claimed motion neither the pixels nor the world tell apart (a
+    # flat patch) is kept, and not said to have moved
+    flat = np.full((80, 80), 100, np.float32)
+    out, origins = retire(labels, {}, ids, thetas, trans, 1, None, flat, flat.copy(), 5.0)
+    assert set(origins) == {1} and not origins[1].moved
 
 
 #: A newborn (id 4, rows and columns 30-50 of an 80 x 80 frame) born at the last frame
