@@ -587,7 +587,7 @@ class FirstLook:
             rgb: (H, W, 3) uint8 current frame.
             moved: marks whose body is known to have moved since its birth (its own
                 motion explains its pixels better than the static world's,
-                :attr:`motionbits.retirement.Origin.moved`): never among them. A uniform
+                :func:`motionbits.retirement.moved_marks`): never among them. A uniform
                 block nudged less than its size looks much as first seen.
 
         Returns:

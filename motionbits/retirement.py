@@ -12,7 +12,7 @@ it never moved: it is retired.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Collection, Iterable
 from dataclasses import dataclass
 
 import cv2
@@ -24,7 +24,7 @@ from motionbits.revealed import StaticMemory
 from motionbits.twists import rigid_matrix
 
 __all__ = ["APART_CELLS", "NEAR_WORLD", "OWN_SHARE", "Origin", "origin_residuals", "moved_once",
-           "retire", "retire_shadows"]
+           "moved_marks", "retire", "retire_shadows"]
 
 #: px: below this median distance between where a MotionBit's own and the world's
 #: accumulated motions put its pixels, the two cannot be told apart (no verdict).
@@ -69,7 +69,10 @@ class Origin:
         world: (3, 3) accumulated backward motion of the static world.
         moved: whether, at the last frame :func:`retire` judged it, its own motion
             explained its pixels (within ``explained``) better than the static world's
-            did, by more than ``margin``: the body moved since its birth.
+            did, by more than ``margin``, and the world's did not (worse than
+            ``NEAR_WORLD`` x ``explained``): the body moved since its birth. (Round 58:
+            a block nudged 2 cm read 29-36 grey levels by the world, a static cylinder
+            whose birth frame had the hand beside it 14-16.)
     """
 
     frame: np.ndarray
@@ -246,9 +249,36 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
         if world_res < explained and world_res - body_res < -margin:
             out = np.where(out == i, 0, out)
             del origins[i]
-        else:  # (False where either is NaN)
-            origin.moved = bool(body_res < explained and world_res - body_res > margin)
+        else:  # (False where either is NaN; the world's bound as beside a moving agent)
+            origin.moved = bool(body_res < explained and world_res > NEAR_WORLD * explained
+                                and world_res - body_res > margin)
     return out, origins
+
+
+def moved_marks(shown: np.ndarray, labels: np.ndarray, origins: dict[int, Origin],
+                moving: Collection[int]) -> set[int]:
+    """The marks that bodies at rest now, known to have moved since their birth
+    (:attr:`Origin.moved`), hold most of.
+
+    Args:
+        shown: (H, W) int32 marks shown (0 = none).
+        labels: (H, W) int32 label map of the MotionBits.
+        origins: id -> its :class:`Origin` (after :func:`retire`).
+        moving: ids of the MotionBits moving now (an arm that stops at the last frame
+            moved, and its mark may hold the table it left).
+
+    Returns:
+        The labels of ``shown`` of which more than half the pixels are such MotionBits'.
+    """
+    moved = [i for i, origin in origins.items() if origin.moved and i not in moving]
+    if not moved:
+        return set()
+    marks = shown[np.isin(labels, moved) & (shown > 0)]
+    if not marks.size:
+        return set()
+    held = np.bincount(marks)
+    area = np.bincount(shown.ravel(), minlength=held.size)[:held.size]
+    return {int(i) for i in np.flatnonzero(2 * held > area)}
 
 
 def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,

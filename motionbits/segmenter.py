@@ -53,7 +53,8 @@ from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
 from motionbits.resting import RestingMarks
-from motionbits.retirement import APART_CELLS, Origin, moved_once, retire, retire_shadows
+from motionbits.retirement import (APART_CELLS, Origin, moved_marks, moved_once, retire,
+                                   retire_shadows)
 from motionbits.revealed import StaticMemory, carry_at_rest, grey_change
 from motionbits.second_thread import Task, second_thread
 from motionbits.setdown import SetDown
@@ -584,8 +585,7 @@ class MotionBitsSegmenter:
             # looks much as first seen) -- nor where a mark at rest shows the table a body
             # first seen there has left
             if calm is not None:
-                moved = {rep[i] for i, origin in self._origins.items()
-                         if origin.moved and rep.get(i)}
+                moved = moved_marks(shown, with_links, self._origins, moving)
                 shown = drop_labels(shown, self._first_look.as_first_seen(shown, cur, moved))
                 shown = drop_labels(shown, self._first_look.uncovered(shown, cur, still_marks))
             # stripes are not a body (the flow along a wood grain's lines)

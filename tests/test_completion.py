@@ -380,7 +380,8 @@ def test_a_mark_that_stands_as_first_seen_is_found_and_a_moved_body_is_not():
     labels[150:190, 230:290] = 9  # a body on pixels first seen under the hand
     labels[10:30, 200:260] = 2  # a patch of the table
     assert first.as_first_seen(labels, now).tolist() == [2, 4]
-    # a mark whose body's own motion explained it (it moved since its birth) is not
+    # a mark whose body is known to have moved since its birth (a uniform block nudged
+    # less than its size looks much as first seen) is not
     assert first.as_first_seen(labels, now, moved={4, 11}).tolist() == [2]
     # a third of the kicked block changed: 20 of its 60 columns
     moved = labels == 7

@@ -12,7 +12,7 @@ from motionbits.nodes import NodeGrid
 from motionbits.propagation import propagate_components
 from motionbits.records import (MotionSpans, _area_centroid, build_result, group_map, moving_ids,
                                 twist_sources)
-from motionbits.retirement import Origin, moved_once, origin_residuals, retire
+from motionbits.retirement import Origin, moved_marks, moved_once, origin_residuals, retire
 from motionbits.twists import nodes_to_fit
 
 
@@ -118,16 +118,41 @@ def test_retire_drops_a_motionbit_whose_pixels_did_not_move():
     moved = np.roll(prev, -5, axis=1)
     out, origins = retire(labels, {}, ids, thetas, trans, 1, None, prev, moved, 5.0)
     np.testing.assert_array_equal(out, labels)
-    assert set(origins) == {1} and origins[1].moved  # its own motion explains it
+    assert set(origins) == {1}
+    # ... and its own motion explains it where the world's does not: it moved
+    out, origins = retire(labels, {}, ids, thetas, trans, 1, None, prev, moved, 5.0,
+                          explained=12.0)
+    assert set(origins) == {1} and origins[1].moved
     # the next frame it stands still: its origin still tells it moved since its birth
     out, origins = retire(labels, origins, np.zeros(0, np.int64), np.zeros(0),
-                          np.zeros((0, 2)), 2, None, moved, moved.copy(), 5.0)
+                          np.zeros((0, 2)), 2, None, moved, moved.copy(), 5.0, explained=12.0)
     assert set(origins) == {1} and origins[1].moved
     # a MotionBit whose claimed motion neither the pixels nor the world tell apart (a
-    # flat patch) is kept, and not said to have moved
+    # flat patch) is kept, and not said to have moved; nor one that the world explains
+    # hardly worse than the bound (a birth frame with an occluder's edge)
     flat = np.full((80, 80), 100, np.float32)
-    out, origins = retire(labels, {}, ids, thetas, trans, 1, None, flat, flat.copy(), 5.0)
+    out, origins = retire(labels, {}, ids, thetas, trans, 1, None, flat, flat.copy(), 5.0,
+                          explained=12.0)
     assert set(origins) == {1} and not origins[1].moved
+    faint = flat + np.roll(prev - prev.mean(), -5, axis=1) * 0.1  # texture of ~8 levels
+    out, origins = retire(labels, {}, ids, thetas, trans, 1, None, flat + (prev - prev.mean())
+                          * 0.1, faint, 5.0, explained=12.0)
+    assert set(origins) == {1} and not origins[1].moved
+
+
+def test_moved_marks_are_those_mostly_held_by_bodies_at_rest_that_moved():
+    labels = np.zeros((40, 60), np.int32)
+    labels[5:25, 5:25] = 1  # a block nudged, at rest now
+    labels[5:25, 30:55] = 2  # an arm that moved and moves now
+    labels[28:38, 5:25] = 3  # a static patch
+    shown = np.where(labels == 3, 1, labels)  # the patch shown in the block's mark ...
+    shown[5:25, 25:30] = 2  # ... and the arm's mark with the table it left
+    origins = {i: Origin(np.zeros((40, 60), np.float32), np.eye(3), np.eye(3), moved=i < 3)
+               for i in (1, 2, 3)}
+    assert moved_marks(shown, labels, origins, moving={2}) == {1}
+    assert moved_marks(shown, labels, origins, moving=set()) == {1, 2}
+    shown[26:40, :] = 1  # the block's mark, mostly the static table now
+    assert moved_marks(shown, labels, origins, moving={2}) == set()
 
 
 #: A newborn (id 4, rows and columns 30-50 of an 80 x 80 frame) born at the last frame
