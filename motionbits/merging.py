@@ -95,9 +95,7 @@ OUTWEIGH = 3
 
 #: Two marks at rest that touch are one body when their union fills at least this share of
 #: its convex hull (:func:`join_convex`): a block's top face and its sides, a cylinder's
-#: top and its side, shown as two marks once set down (round 43). Round 58 tried 0.85:
-#: three split blocks joined on one held-out folder, a block with the static cylinder
-#: under it on another, and on 02_cups.mp4 a hand holding a cup.
+#: top and its side, shown as two marks once set down (round 43).
 CONVEX_SOLIDITY = 0.9
 #: ... and they share at least this share of the shorter of their two outlines (a corner
 #: of contact is not one body) ...
@@ -208,32 +206,24 @@ def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
     return pairs
 
 
-def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGroups,
-                found_at_rest: Collection[int] = ()) -> list[tuple[int, int]]:
+def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGroups
+                ) -> list[tuple[int, int]]:
     """Pairs of marks at rest that are one body by their shape: they touch along at least
     ``CONVEX_BORDER`` of the shorter outline, the larger is at most ``CONVEX_AREA_RATIO``
     times the smaller, and together they fill ``CONVEX_SOLIDITY`` of their union's convex
-    hull. Each such pair not known to disagree (:meth:`MotionBitGroups.known`) is joined
-    and recorded in ``groups`` as agreeing, so that later frames show them as one; one
-    known to disagree is joined (at this frame) only where either mark is one found at
-    rest (``found_at_rest``).
+    hull. Each such pair not known to disagree (:meth:`MotionBitGroups.known`)
+    is recorded in ``groups`` as agreeing, so that later frames show them as one.
 
     The faces of a body that its motion or its arrival marked apart (a block's top face
     and its sides, seen from above at an angle) stand still side by side once it is set
-    down: no motion tells them apart or together any more. Their marks may have
-    disagreed before, even for good: the mark that moved with a carried block still
-    moved (lowered) at the frame its side was found at rest beside it (round 58). Two
-    bodies at rest side by side rarely fill their union's hull (the rigid bodies of the
-    generated tracks are blocks, cylinders and balls; a shadow beside a block makes an L);
-    two that moved apart before (cups shuffled, then at rest side by side with a mark
-    spilled between them, `02_cups.mp4`) stay apart.
+    down: no motion tells them apart or together any more. Two bodies at rest side by
+    side rarely fill their union's hull (the rigid bodies of the generated tracks are
+    blocks, cylinders and balls; a shadow beside a block makes an L).
 
     Args:
         shown: (H, W) int32 marks shown, under their group labels (0 = none).
         moving: group labels moving now (not joined).
         groups: the merging state; updated in place.
-        found_at_rest: group labels holding a MotionBit found at rest where its body came
-            to stand (:attr:`motionbits.setdown.SetDown.parent`: pieces set down, arrivals).
 
     Returns:
         (keep, drop) pairs, keep < drop, in the order found; a label may occur in several.
@@ -245,8 +235,7 @@ def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGro
     square = np.ones((3, 3), np.uint8)
     joined = []
     for a, b in sorted(touching_pairs(shown, 1)):
-        if a in moving or b in moving or (groups.known(a, b) and a not in found_at_rest
-                                          and b not in found_at_rest):
+        if a in moving or b in moving or groups.known(a, b):
             continue
         (ra, ca), (rb, cb) = boxes[a - 1], boxes[b - 1]
         sub = shown[min(ra.start, rb.start):max(ra.stop, rb.stop),

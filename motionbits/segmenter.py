@@ -592,9 +592,7 @@ class MotionBitsSegmenter:
             shown = hide_thin(shown, int(np.ceil(max(grid.cell))))
             # marks at rest side by side that make one convex body are one (its faces,
             # marked apart and set down: nothing moves to tell)
-            found = {rep[i] for i in self._setdown.parent if rep.get(i)}
-            shown, rep = apply_joins(shown, rep, join_convex(shown, moving_marks, self._groups,
-                                                             found))
+            shown, rep = apply_joins(shown, rep, join_convex(shown, moving_marks, self._groups))
             # one mark, one connected body: the pieces of a mark far apart are shown apart
             split, rep, fresh, self._next_id = split_apart(
                 shown, with_links, rep, source, self._next_id,

@@ -9,7 +9,7 @@ import motionbits.segmenter as segmenter_module
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
 from motionbits.masks import hide_small, hide_thin
-from motionbits.merging import (AT_ONCE, OUTWEIGH, MotionBitGroups, apply_joins, drop_seen_still,
+from motionbits.merging import (OUTWEIGH, MotionBitGroups, apply_joins, drop_seen_still,
                                 join_convex, observe_touching, seen_still, standing_still,
                                 touching_pairs)
 from motionbits.nodes import NodeGrid
@@ -689,24 +689,7 @@ def test_join_convex_joins_the_faces_of_a_body_at_rest_under_the_smaller_label()
     assert groups.representatives([2, 5, 7]) == {2: 2, 5: 2, 7: 7}
 
 
-def test_join_convex_joins_faces_whose_marks_once_moved_apart_once_both_rest():
-    """The mark that moved with a carried block disagreed with the block's side, found
-    at rest beside it while the block was still lowered; once both rest, the shape
-    decides. Two marks that moved apart, neither found at rest (cups shuffled), stay
-    apart."""
-    groups = MotionBitGroups(agree=1.5, disagree=6.0)
-    groups.observe(2, 5, excess=3 * AT_ONCE * 6.0)  # far apart at once: they disagree
-    groups.forbid(5, [2])  # ... even for good
-    assert groups.known(2, 5)
-    shown = _faces()
-    assert join_convex(shown, {2}, groups, found_at_rest={5}) == []  # still lowered
-    assert join_convex(shown, set(), groups, found_at_rest={5}) == [(2, 5)]
-    assert join_convex(shown, set(), groups, found_at_rest={7}) == []
-    # not recorded as agreeing: each frame's shape decides again
-    assert groups.representatives([2, 5]) == {2: 2, 5: 5}
-
-
-def test_join_convex_leaves_moving_marks_l_shapes_corners_spills_and_disagreeing_pairs():
+def test_join_convex_leaves_moving_marks_l_shapes_corners_and_disagreeing_pairs():
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     shown = _faces()
     assert join_convex(shown, {5}, groups) == []  # one of them moves: its motion decides
@@ -721,7 +704,7 @@ def test_join_convex_leaves_moving_marks_l_shapes_corners_spills_and_disagreeing
     spilled = _faces()
     spilled[22:60, 0:80] = 5  # a mark spilled over the table below the block's top
     assert join_convex(spilled, set(), groups) == []
-    groups.forbid(2, [5])  # known to be two bodies, neither found at rest
+    groups.forbid(2, [5])  # known to be two bodies
     assert join_convex(shown, set(), groups) == []
     rep = {2: 2, 5: 5}
     same_shown, same_rep = apply_joins(shown, rep, [])
