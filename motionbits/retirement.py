@@ -71,7 +71,7 @@ class Origin:
             explained its pixels (within ``explained``) better than the static world's
             did, by more than ``margin``, and the world's did not (worse than
             ``NEAR_WORLD`` x ``explained``): the body moved since its birth. (Round 58:
-            a block nudged 2 cm read 29-36 grey levels by the world, a static cylinder
+            a block nudged 1.8 cm read 29-36 grey levels by the world, a static cylinder
             whose birth frame had the hand beside it 14-16.)
     """
 
@@ -258,14 +258,14 @@ def retire(labels: np.ndarray, origins: dict[int, Origin], ids: np.ndarray,
 def moved_marks(shown: np.ndarray, labels: np.ndarray, origins: dict[int, Origin],
                 moving: Collection[int]) -> set[int]:
     """The marks that bodies at rest now, known to have moved since their birth
-    (:attr:`Origin.moved`), hold most of.
+    (:attr:`Origin.moved`), hold most of (an arm stopped at a clip's last frame has moved
+    too, and its group's mark may hold mostly the table it left: that mark is not one).
 
     Args:
         shown: (H, W) int32 marks shown (0 = none).
         labels: (H, W) int32 label map of the MotionBits.
         origins: id -> its :class:`Origin` (after :func:`retire`).
-        moving: ids of the MotionBits moving now (an arm that stops at the last frame
-            moved, and its mark may hold the table it left).
+        moving: ids of the MotionBits moving now (not counted).
 
     Returns:
         The labels of ``shown`` of which more than half the pixels are such MotionBits'.
