@@ -273,11 +273,12 @@ def moved_marks(shown: np.ndarray, labels: np.ndarray, origins: dict[int, Origin
     moved = [i for i, origin in origins.items() if origin.moved and i not in moving]
     if not moved:
         return set()
-    marks = shown[np.isin(labels, moved) & (shown > 0)]
-    if not marks.size:
+    box = nonzero_box(shown)  # (on the marks' box only: this runs every frame)
+    marks = shown[box]
+    held = np.bincount(marks[np.isin(labels[box], moved) & (marks > 0)])
+    if not held.any():
         return set()
-    held = np.bincount(marks)
-    area = np.bincount(shown.ravel(), minlength=held.size)[:held.size]
+    area = np.bincount(marks.ravel(), minlength=held.size)[:held.size]
     return {int(i) for i in np.flatnonzero(2 * held > area)}
 
 
