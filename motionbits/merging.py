@@ -63,14 +63,16 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from motionbits.boxes import label_boxes, nonzero_box
+from motionbits.boxes import grow_box, label_areas, label_boxes, nonzero_box
 from motionbits.evidence import photometric_residual
 from motionbits.nodes import NodeGrid
+from motionbits.revealed import SHADOW_CHROMA, SHADOW_MIN_SUM
 from motionbits.twists import rigid_matrix
 
 __all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "standing_still", "seen_still",
-           "drop_seen_still", "observe_touching", "join_convex", "apply_joins", "DROP_WIDTH",
-           "MIN_MOVED", "CONVEX_SOLIDITY", "CONVEX_BORDER", "CONVEX_AREA_RATIO"]
+           "drop_seen_still", "observe_touching", "join_convex", "mostly_moving", "apply_joins", "DROP_WIDTH",
+           "MIN_MOVED", "CONVEX_SOLIDITY", "CONVEX_BORDER", "CONVEX_AREA_RATIO",
+           "FACES_SOLIDITY", "FACES_RING", "FACES_MIN_PIXELS"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
 STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
@@ -103,6 +105,21 @@ CONVEX_BORDER = 0.1
 #: ... and the larger is at most this many times the smaller (the faces of one body are
 #: of a size: a block beside a large mark spilled over the table is not its face).
 CONVEX_AREA_RATIO = 4.0
+#: Two such marks that fill only this share of their hull are one body when they have one
+#: colour but for the light: median chromaticities within
+#: :data:`motionbits.revealed.SHADOW_CHROMA` (a face turned from the light is darker, not
+#: of another colour), each unlike the unlabelled surface around them by as much (a
+#: shadow on the table has the table's colour). Round 59, the last frames of held28 + four
+#: older folders (555 bodies): of the touching pairs of marks at rest that fill 80-90% of
+#: their hull, those of one colour were 21 pairs of faces of one body and 1 other pair;
+#: faces marked apart at the hull's 0.8-0.9 (a spill, a rounded cylinder top) cost about
+#: 1 mIoU point.
+FACES_SOLIDITY = 0.8
+#: px: the ring around the two marks whose colour they must not have.
+FACES_RING = 5
+#: Fewest pixels bright enough to have a colour (``SHADOW_MIN_SUM``) for each of the
+#: three colours (else the pair is not joined by colour).
+FACES_MIN_PIXELS = 20
 
 #: px (working resolution): :func:`drop_seen_still` leaves slivers thinner than this. On
 #: the planar demo clip a translating quad lost a sliver of its leading edge at every
@@ -206,13 +223,15 @@ def touching_pairs(labels: np.ndarray, reach: int) -> set[tuple[int, int]]:
     return pairs
 
 
-def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGroups
-                ) -> list[tuple[int, int]]:
+def join_convex(shown: np.ndarray, rgb: np.ndarray, moving: Collection[int],
+                groups: MotionBitGroups) -> list[tuple[int, int]]:
     """Pairs of marks at rest that are one body by their shape: they touch along at least
     ``CONVEX_BORDER`` of the shorter outline, the larger is at most ``CONVEX_AREA_RATIO``
     times the smaller, and together they fill ``CONVEX_SOLIDITY`` of their union's convex
-    hull. Each such pair not known to disagree (:meth:`MotionBitGroups.known`)
-    is recorded in ``groups`` as agreeing, so that later frames show them as one.
+    hull -- or ``FACES_SOLIDITY`` of it, with one colour but for the light
+    (:func:`one_colour`). Each such pair not known to disagree
+    (:meth:`MotionBitGroups.known`) is recorded in ``groups`` as agreeing, so that later
+    frames show them as one.
 
     The faces of a body that its motion or its arrival marked apart (a block's top face
     and its sides, seen from above at an angle) stand still side by side once it is set
@@ -222,6 +241,7 @@ def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGro
 
     Args:
         shown: (H, W) int32 marks shown, under their group labels (0 = none).
+        rgb: (H, W, 3) uint8 current frame.
         moving: group labels moving now (not joined).
         groups: the merging state; updated in place.
 
@@ -250,10 +270,32 @@ def join_convex(shown: np.ndarray, moving: Collection[int], groups: MotionBitGro
         union = mask_a | mask_b
         contours, _ = cv2.findContours(union, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         hull = cv2.contourArea(cv2.convexHull(np.vstack(contours)))
-        if area_a + area_b >= CONVEX_SOLIDITY * max(hull, 1.0):
+        solidity = (area_a + area_b) / max(hull, 1.0)
+        if solidity >= CONVEX_SOLIDITY or (solidity >= FACES_SOLIDITY
+                                           and one_colour(shown, rgb, a, b)):
             groups.observe(a, b, 0.0)
             joined.append((a, b))
     return joined
+
+
+def mostly_moving(state: np.ndarray, rep: dict[int, int], moving: Collection[int],
+                  marks: Collection[int]) -> set[int]:
+    """The shown labels among ``marks`` most of whose pixels in ``state`` ((H, W) int32
+    MotionBit ids) belong to MotionBits ``moving`` now (``rep``: id -> the label it is
+    shown under). For :func:`join_convex`: a sliver of a body set down that reads a
+    neighbour's smeared flow, or the camera model's residual on a tall face (0.65 px a
+    frame against the 0.6 px move threshold, held28), does not make the body move."""
+    if not marks:
+        return set()
+    areas = label_areas(state)
+    total: dict[int, int] = {}
+    stirring: dict[int, int] = {}
+    for i, r in rep.items():
+        if r in marks and i < areas.size:
+            total[r] = total.get(r, 0) + int(areas[i])
+            if i in moving:
+                stirring[r] = stirring.get(r, 0) + int(areas[i])
+    return {r for r in marks if 2 * stirring.get(r, 0) >= total.get(r, 0)}
 
 
 def apply_joins(shown: np.ndarray, rep: dict[int, int], pairs: list[tuple[int, int]]
@@ -273,6 +315,39 @@ def apply_joins(shown: np.ndarray, rep: dict[int, int], pairs: list[tuple[int, i
     for label, to in final.items():
         lut[label] = to
     return lut[shown], {i: final.get(r, r) for i, r in rep.items()}
+
+
+def one_colour(shown: np.ndarray, rgb: np.ndarray, a: int, b: int) -> bool:
+    """Whether marks ``a`` and ``b`` of ``shown`` ((H, W) int32) have one colour in
+    ``rgb`` ((H, W, 3) uint8) but for the light, and not the colour of the unlabelled
+    surface within ``FACES_RING`` px of them: their median chromaticities (each channel over
+    the sum of the three, pixels whose sum is at least ``SHADOW_MIN_SUM``) lie within
+    ``SHADOW_CHROMA`` of each other and at least that far from the surface's. False where
+    any of the three has fewer than ``FACES_MIN_PIXELS`` such pixels."""
+    box = grow_box(nonzero_box((shown == a) | (shown == b)), FACES_RING, shown.shape)
+    sub = shown[box]
+    pair = ((sub == a) | (sub == b)).view(np.uint8)
+    side = 2 * FACES_RING + 1
+    ring = (cv2.dilate(pair, np.ones((side, side), np.uint8)) > 0) & (sub == 0)
+    colours = [_chromaticity(rgb[box][m]) for m in (sub == a, sub == b, ring)]
+    if any(c is None for c in colours):
+        return False
+    first, second, around = colours
+    return bool(np.abs(first - second).max() < SHADOW_CHROMA
+                and np.abs(first - around).max() >= SHADOW_CHROMA
+                and np.abs(second - around).max() >= SHADOW_CHROMA)
+
+
+def _chromaticity(pixels: np.ndarray) -> np.ndarray | None:
+    """(3,) float32 median chromaticity of the (n, 3) uint8 ``pixels`` bright enough to
+    have a colour (sum of the three at least ``SHADOW_MIN_SUM``); None with fewer than
+    ``FACES_MIN_PIXELS`` of them."""
+    light = pixels.astype(np.float32)
+    total = light.sum(axis=1)
+    bright = total >= SHADOW_MIN_SUM
+    if np.count_nonzero(bright) < FACES_MIN_PIXELS:
+        return None
+    return np.median(light[bright] / total[bright, None], axis=0)
 
 
 def _outline_length(mask: np.ndarray) -> float:

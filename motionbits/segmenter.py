@@ -44,7 +44,8 @@ from motionbits.masks import (SPECK_CELLS, StaticCost, assign_pixels, drop_label
                               hide_thin, remove_specks, snap_to_edges, static_cost,
                               trim_flat_background)
 from motionbits.merging import (MIN_MOVED, MotionBitGroups, apply_joins, drop_seen_still,
-                                join_convex, observe_touching, seen_still, standing_still)
+                                join_convex, mostly_moving, observe_touching, seen_still,
+                                standing_still)
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.numbering import ShownNumbers, by_number
@@ -468,7 +469,7 @@ class MotionBitsSegmenter:
             labels = self._setdown.confirm(labels, cur_g, prev_g)
             labels, held, self._next_id = self._setdown.split(
                 labels, prior, prior_valid, carried_earned, ids, thetas, trans, cur_g, prev_g,
-                grid.cell, self._next_id, cam, changed)
+                grid.cell, self._next_id, cam, changed, moving)
             earned = earned | held
             # bodies that arrived out of their motion's sight (carried hidden under a
             # gripper, knocked across in a frame): new at rest where the static world was
@@ -591,8 +592,11 @@ class MotionBitsSegmenter:
             # stripes are not a body (the flow along a wood grain's lines)
             shown = hide_thin(shown, int(np.ceil(max(grid.cell))))
             # marks at rest side by side that make one convex body are one (its faces,
-            # marked apart and set down: nothing moves to tell)
-            shown, rep = apply_joins(shown, rep, join_convex(shown, moving_marks, self._groups))
+            # marked apart and set down: nothing moves to tell); a mark moves here when
+            # most of it does
+            shown, rep = apply_joins(shown, rep, join_convex(
+                shown, cur, mostly_moving(with_links, rep, moving, moving_marks),
+                self._groups))
             # one mark, one connected body: the pieces of a mark far apart are shown apart
             split, rep, fresh, self._next_id = split_apart(
                 shown, with_links, rep, source, self._next_id,

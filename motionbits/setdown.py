@@ -23,8 +23,11 @@ MotionBit when
   its label onto fails this test: it was there all along, or what was there before was
   something else and it looks as the static world did;
 
-and it is shown from the next frame on, if it still stands there, at rest. A piece lost
-next to a piece set down earlier by the same MotionBit joins it.
+and it is confirmed at the next frame if it still stands there, at rest. A solid piece
+(a block, not the sliver a moving shadow's edge leaves) that no moving MotionBit borders
+is shown at once, the others once confirmed (round 59: a block set down at the clip's
+last frame was held back one frame too many). A piece lost next to a piece set down
+earlier by the same MotionBit joins it.
 
 State: the last ``WINDOW`` grey frames and each MotionBit's motion at those frames.
 """
@@ -66,7 +69,7 @@ WINDOW = 3
 NEW_SHARE = 0.5
 #: At the next frame it is confirmed if it still holds this share of its area.
 REST_SHARE = 0.5
-#: A piece found at rest otherwise (:meth:`SetDown.adopt`) is shown at once if an opening
+#: A piece set down or found at rest otherwise (:meth:`SetDown._hold`) is shown at once if an opening
 #: by a square of this many grid cells keeps ``COMPACT_SHARE`` of it (a block, not the
 #: sliver a moving shadow's edge leaves) ...
 SOLID_CELLS = 2
@@ -94,9 +97,8 @@ class SetDown:
 
     Attributes:
         pending: new id -> its area (px) at birth, for pieces not yet confirmed.
-        held_back: the pending ids not shown until they are confirmed: all of
-            :meth:`split`'s pieces, and those of :meth:`adopt` that are not solid or lie
-            beside a moving MotionBit.
+        held_back: the pending ids not shown until they are confirmed: those that are
+            not solid or lie beside a moving MotionBit (:meth:`_hold`).
         parent: new id -> the id of the MotionBit it was left behind by.
     """
 
@@ -148,8 +150,8 @@ class SetDown:
     def split(self, labels: np.ndarray, prior: np.ndarray, prior_valid: np.ndarray,
               earned: np.ndarray, ids: np.ndarray, thetas: np.ndarray, trans: np.ndarray,
               cur: np.ndarray, prev: np.ndarray, cell: tuple[float, float], next_id: int,
-              cam: np.ndarray | None, changed: np.ndarray | None = None
-              ) -> tuple[np.ndarray, np.ndarray, int]:
+              cam: np.ndarray | None, changed: np.ndarray | None,
+              moving: Collection[int]) -> tuple[np.ndarray, np.ndarray, int]:
         """New MotionBits from the pieces that MotionBits with a cluster now left behind.
 
         Args:
@@ -165,6 +167,8 @@ class SetDown:
             cam: (3, 3) camera motion of this frame (current -> previous) or None (static).
             changed: (H, W) bool or None, pixels that look unlike the static world last
                 seen standing still there (:meth:`StaticMemory.changed`); None: no memory.
+            moving: ids of the MotionBits that move now (a new piece beside one of them
+                is held back, :meth:`_hold`).
 
         Returns:
             The label map with the new pieces, the (H, W) bool pixels they hold (their
@@ -175,6 +179,7 @@ class SetDown:
         if len(self._past) < WINDOW or not lost.any():
             return labels, held, next_id
         out = labels.copy()
+        fresh = []  # the new ids
         side = max(1, int(round(COMPACT_CELLS * max(cell))))
         kernel = np.ones((side, side), np.uint8)
         min_area = SETDOWN_CELLS * cell[0] * cell[1]
@@ -210,22 +215,19 @@ class SetDown:
                 new = self._neighbour(out, box, piece, int(lab), side)
                 if new is None:
                     new, next_id = next_id, next_id + 1
-                    self.pending[new] = int(piece.sum())
-                    self.held_back.add(new)
+                    fresh.append(new)
                     self.parent[new] = int(lab)
                 out[box][piece] = new
                 held[box][piece] = True
+        self._hold(fresh, out, cell, moving)
         return out, held, next_id
 
     def adopt(self, pieces: dict[int, int], labels: np.ndarray, cell: tuple[float, float],
               moving: Collection[int]) -> None:
         """Take new MotionBits found at rest otherwise (:class:`motionbits.arrivals.Arrivals`;
         id -> the id they were left by) as pieces set down at this frame, confirmed at the
-        next frame if they still stand there. A solid piece (an opening by a square of
-        ``SOLID_CELLS`` grid cells keeps ``COMPACT_SHARE`` of it, holes filled: a
-        cylinder's top whose middle has the table's colour is solid) is shown at once, unless
-        a moving MotionBit holds ``BESIDE_MOVING_SHARE`` of the ring around it (then it may
-        be a part of that body its motion missed); the others from the next frame.
+        next frame if they still stand there, and shown at once or held back as
+        :meth:`split`'s (:meth:`_hold`).
 
         Args:
             pieces: new id -> the id of the MotionBit that last covered it.
@@ -233,12 +235,22 @@ class SetDown:
             cell: (w, h) px of one grid cell.
             moving: ids of the MotionBits that move now.
         """
+        self.parent.update(pieces)
+        self._hold(pieces, labels, cell, moving)
+
+    def _hold(self, pieces: Collection[int], labels: np.ndarray, cell: tuple[float, float],
+              moving: Collection[int]) -> None:
+        """Make the new ids ``pieces`` (in the (H, W) int32 ``labels``) pending, and hold
+        back those that are not solid (an opening by a square of ``SOLID_CELLS`` grid
+        cells keeps ``COMPACT_SHARE`` of the piece, holes filled: a cylinder's top whose
+        middle has the table's colour is solid) or whose surrounding ring a moving
+        MotionBit holds ``BESIDE_MOVING_SHARE`` of (it may be a part of that body its
+        motion missed); the others are shown at once."""
         side = max(1, int(round(SOLID_CELLS * max(cell))))
         square = np.ones((side, side), np.uint8)
-        for i, parent in pieces.items():
+        for i in pieces:
             piece = labels == i
             self.pending[i] = int(np.count_nonzero(piece))
-            self.parent[i] = parent
             box = grow_box(nonzero_box(piece), side, labels.shape)
             ring = labels[box][(cv2.dilate(piece[box].view(np.uint8), square) > 0) & ~piece[box]]
             if (not _compact(binary_fill_holes(piece[box]), square) or (

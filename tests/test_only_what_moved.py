@@ -10,8 +10,8 @@ from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
 from motionbits.masks import hide_small, hide_thin
 from motionbits.merging import (OUTWEIGH, MotionBitGroups, apply_joins, drop_seen_still,
-                                join_convex, observe_touching, seen_still, standing_still,
-                                touching_pairs)
+                                join_convex, mostly_moving, observe_touching, seen_still,
+                                standing_still, touching_pairs)
 from motionbits.nodes import NodeGrid
 from motionbits.revealed import StaticMemory, grey_change
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -675,10 +675,15 @@ def _faces(shape=(60, 80)):
     return shown
 
 
+def _grey(shape=(60, 80)):
+    """An (h, w, 3) uint8 frame of one grey: no two marks differ from their surface."""
+    return np.full((*shape, 3), 128, np.uint8)
+
+
 def test_join_convex_joins_the_faces_of_a_body_at_rest_under_the_smaller_label():
     shown = _faces()
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
-    pairs = join_convex(shown, set(), groups)
+    pairs = join_convex(shown, _grey(), set(), groups)
     assert pairs == [(2, 5)]
     rep = {2: 2, 3: 5, 5: 5, 7: 7}
     joined, new_rep = apply_joins(shown, rep, pairs)
@@ -692,20 +697,58 @@ def test_join_convex_joins_the_faces_of_a_body_at_rest_under_the_smaller_label()
 def test_join_convex_leaves_moving_marks_l_shapes_corners_and_disagreeing_pairs():
     groups = MotionBitGroups(agree=1.5, disagree=6.0)
     shown = _faces()
-    assert join_convex(shown, {5}, groups) == []  # one of them moves: its motion decides
+    grey = _grey()
+    assert join_convex(shown, grey, {5}, groups) == []  # one moves: its motion decides
     ell = shown.copy()
     ell[22:40, 20:50] = 0
     ell[10:40, 50:58] = 5  # a shadow beside the block: together an L
-    assert join_convex(ell, set(), groups) == []
+    assert join_convex(ell, grey, set(), groups) == []
     corner = np.zeros((60, 80), np.int32)
     corner[10:30, 10:30] = 2
     corner[30:50, 30:50] = 5  # two blocks touching at a corner
-    assert join_convex(corner, set(), groups) == []
+    assert join_convex(corner, grey, set(), groups) == []
     spilled = _faces()
     spilled[22:60, 0:80] = 5  # a mark spilled over the table below the block's top
-    assert join_convex(spilled, set(), groups) == []
+    assert join_convex(spilled, grey, set(), groups) == []
     groups.forbid(2, [5])  # known to be two bodies
-    assert join_convex(shown, set(), groups) == []
+    assert join_convex(shown, grey, set(), groups) == []
     rep = {2: 2, 5: 5}
     same_shown, same_rep = apply_joins(shown, rep, [])
     assert same_shown is shown and same_rep is rep
+
+
+def test_join_convex_joins_faces_that_fill_less_of_their_hull_if_one_colour_but_for_light():
+    """A block's top face and its side, a notch out of the side (together 84% of their
+    hull): one body if they are one colour, lit and shaded, unlike the table around them;
+    not two bodies of two colours, nor two marks of the table's colour (a shadow)."""
+    shown = _faces()
+    shown[28:40, 27:43] = 0  # a notch in the side's lower edge: 84% of the hull
+    table, red, dark_red, blue = (90, 140, 90), (200, 40, 40), (100, 20, 20), (40, 40, 200)
+    for top, side, joined in ((red, dark_red, True), (red, blue, False),
+                              ((45, 70, 45), (30, 47, 30), False)):  # the table in shadow
+        rgb = np.zeros((60, 80, 3), np.uint8)
+        rgb[...] = table
+        rgb[shown == 2] = top
+        rgb[shown == 5] = side
+        groups = MotionBitGroups(agree=1.5, disagree=6.0)
+        assert join_convex(shown, rgb, set(), groups) == ([(2, 5)] if joined else [])
+    # at 80% of the hull or less, colour does not join them (a spill, two bodies)
+    shown[26:40, 26:44] = 0  # 77%
+    rgb[...] = table
+    rgb[shown == 2], rgb[shown == 5] = red, dark_red
+    assert join_convex(shown, rgb, set(), MotionBitGroups(agree=1.5, disagree=6.0)) == []
+
+
+def test_a_mark_moves_for_the_joins_only_where_most_of_it_moves():
+    """A block set down (MotionBit 3) shown with a sliver (4) that reads a neighbour's
+    smeared flow: the mark does not move; the carrier (5, 6) whose larger part moves
+    does."""
+    state = np.zeros((40, 40), np.int32)
+    state[5:25, 5:25] = 3
+    state[25:28, 5:25] = 4  # the sliver, moving
+    state[30:38, 5:35] = 5  # the carrier's hand, moving ...
+    state[28:30, 25:35] = 6  # ... and a piece of it at rest
+    rep = {3: 3, 4: 3, 5: 5, 6: 5}
+    assert mostly_moving(state, rep, {4, 5}, {3, 5}) == {5}
+    assert mostly_moving(state, rep, {3, 4, 5}, {3, 5}) == {3, 5}
+    assert mostly_moving(state, rep, {4, 5}, set()) == set()

@@ -78,10 +78,33 @@ def test_split_needs_a_piece_that_came_with_its_motionbit():
         prior[20:40, 19:39] = 1
         earned = prior > 0
         out, held, nxt = sd.split(labels, prior, np.ones((h, w), bool), earned, ids, thetas,
-                                  trans, seq[4], seq[3], cell, 2, None)
+                                  trans, seq[4], seq[3], cell, 2, None, None, {1})
         assert (nxt == 3) == came and held.any() == came
         if came:
             assert (out[held] == 2).all() and sd.pending == {2: int(held.sum())}
+            assert sd.held_back == set()  # a solid piece, nothing moving beside it: shown
+
+
+def test_a_piece_set_down_beside_its_moving_carrier_is_held_back_a_frame():
+    """A solid piece set down is shown at once; one that its carrier, still moving, holds
+    around (a part of the carrier its motion missed?) waits for the next frame, as does a
+    sliver."""
+    h, w = 60, 80
+    frames = _carried_patch(0, (h, w), finger=False)
+    cell = (4.0, 4.0)
+    ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])
+    prior = np.zeros((h, w), np.int32)
+    prior[20:40, 19:39] = 1
+    beside = np.zeros((h, w), np.int32)
+    beside[12:20, 15:47] = 1  # the carrier above the piece and to its right
+    beside[12:44, 39:47] = 1
+    for labels, moving, held_back in ((beside, {1}, {2}), (beside, set(), set()),
+                                      (np.zeros((h, w), np.int32), {1}, set())):
+        sd = _recorded(frames, ids, thetas, trans)
+        out, held, nxt = sd.split(labels, prior, np.ones((h, w), bool), prior > 0, ids,
+                                  thetas, trans, frames[4], frames[3], cell, 2, None, None, moving)
+        assert nxt == 3 and (out[held] == 2).all()
+        assert sd.held_back == held_back
 
 
 def test_retire_needs_a_static_frame_that_explains_the_pixels():
@@ -127,10 +150,10 @@ def test_split_takes_a_hidden_piece_that_is_new_where_it_stands():
             trans, frames[4], frames[3], cell, 2, None)
     for new_here in (True, False):
         out, held, nxt = _recorded(frames, ids, thetas, trans).split(
-            *args, np.full((h, w), new_here))
+            *args, np.full((h, w), new_here), set())
         assert held.any() == new_here and (nxt == 3) == new_here
         if new_here:
             assert (out[held] == 2).all() and held[prior > 0].mean() > 0.9
     # without the memory, only the followed-back look counts: the hidden piece is lost
-    _, held, _ = _recorded(frames, ids, thetas, trans).split(*args)
+    _, held, _ = _recorded(frames, ids, thetas, trans).split(*args, None, set())
     assert not held.any()
