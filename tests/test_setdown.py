@@ -67,15 +67,11 @@ def test_split_needs_a_piece_that_came_with_its_motionbit():
     only if its images moved with the MotionBit (a textured patch that was carried), not if
     it is background that was there all along."""
     h, w = 60, 80
-    frames = _carried_patch(0, (h, w), finger=False)
-    cell = (4.0, 4.0)
-    ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])  # parent moves on
+    frames, cell, ids, thetas, trans, prior = _carry(finger=False)  # the parent moves on
     for came in (True, False):
         seq = frames if came else [frames[-1]] * 5  # False: the patch was always there
         sd = _recorded(seq, ids, thetas, trans)
         labels = np.zeros((h, w), np.int32)
-        prior = np.zeros((h, w), np.int32)
-        prior[20:40, 19:39] = 1
         earned = prior > 0
         out, held, nxt = sd.split(labels, prior, np.ones((h, w), bool), earned, ids, thetas,
                                   trans, seq[4], seq[3], cell, 2, None, None, {1})
@@ -87,14 +83,9 @@ def test_split_needs_a_piece_that_came_with_its_motionbit():
 
 def test_a_piece_set_down_beside_its_moving_carrier_is_held_back_a_frame():
     """A solid piece set down is shown at once; one that its carrier, still moving, holds
-    around (a part of the carrier its motion missed?) waits for the next frame, as does a
-    sliver."""
+    around (a part of the carrier its motion missed?) waits for the next frame."""
     h, w = 60, 80
-    frames = _carried_patch(0, (h, w), finger=False)
-    cell = (4.0, 4.0)
-    ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])
-    prior = np.zeros((h, w), np.int32)
-    prior[20:40, 19:39] = 1
+    frames, cell, ids, thetas, trans, prior = _carry(finger=False)
     beside = np.zeros((h, w), np.int32)
     beside[12:20, 15:47] = 1  # the carrier above the piece and to its right
     beside[12:44, 39:47] = 1
@@ -102,7 +93,8 @@ def test_a_piece_set_down_beside_its_moving_carrier_is_held_back_a_frame():
                                       (np.zeros((h, w), np.int32), {1}, set())):
         sd = _recorded(frames, ids, thetas, trans)
         out, held, nxt = sd.split(labels, prior, np.ones((h, w), bool), prior > 0, ids,
-                                  thetas, trans, frames[4], frames[3], cell, 2, None, None, moving)
+                                  thetas, trans, frames[4], frames[3], cell, 2, None, None,
+                                  moving)
         assert nxt == 3 and (out[held] == 2).all()
         assert sd.held_back == held_back
 
@@ -128,6 +120,15 @@ def test_retire_needs_a_static_frame_that_explains_the_pixels():
     assert not out.any()
 
 
+def _carry(finger: bool):
+    """A patch carried 3 px a frame by MotionBit 1 (moving on) on 60x80 frames, its last
+    label 1 at rows 20:40, cols 19:39: (frames, cell, ids, thetas, trans, prior)."""
+    frames = _carried_patch(2 if finger else 0, (60, 80), finger=finger)
+    prior = np.zeros((60, 80), np.int32)
+    prior[20:40, 19:39] = 1
+    return frames, (4.0, 4.0), np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]]), prior
+
+
 def _recorded(frames, ids, thetas, trans) -> SetDown:
     """A SetDown that saw the motions of frames 1..3 (``evidence`` 3, ``rest`` 12)."""
     sd = SetDown(evidence=3.0, rest=12.0)
@@ -141,11 +142,7 @@ def test_split_takes_a_hidden_piece_that_is_new_where_it_stands():
     match its followed-back look, yet it came with its MotionBit: it becomes a new MotionBit
     where it looks unlike the static world last seen there, and not otherwise."""
     h, w = 60, 80
-    frames = _carried_patch(2, (h, w), finger=True)
-    cell = (4.0, 4.0)
-    ids, thetas, trans = np.array([1]), np.zeros(1), np.array([[-3.0, 0.0]])
-    prior = np.zeros((h, w), np.int32)
-    prior[20:40, 19:39] = 1
+    frames, cell, ids, thetas, trans, prior = _carry(finger=True)
     args = (np.zeros((h, w), np.int32), prior, np.ones((h, w), bool), prior > 0, ids, thetas,
             trans, frames[4], frames[3], cell, 2, None)
     for new_here in (True, False):
