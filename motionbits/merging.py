@@ -70,9 +70,9 @@ from motionbits.revealed import SHADOW_CHROMA, SHADOW_MIN_SUM
 from motionbits.twists import rigid_matrix
 
 __all__ = ["touching_pairs", "fit_affine", "MotionBitGroups", "standing_still", "seen_still",
-           "drop_seen_still", "observe_touching", "join_convex", "mostly_moving", "apply_joins", "DROP_WIDTH",
-           "MIN_MOVED", "CONVEX_SOLIDITY", "CONVEX_BORDER", "CONVEX_AREA_RATIO",
-           "FACES_SOLIDITY", "FACES_RING", "FACES_MIN_PIXELS"]
+           "drop_seen_still", "observe_touching", "join_convex", "mostly_moving", "one_colour",
+           "apply_joins", "DROP_WIDTH", "MIN_MOVED", "CONVEX_SOLIDITY", "CONVEX_BORDER",
+           "CONVEX_AREA_RATIO", "FACES_SOLIDITY", "FACES_RING", "FACES_MIN_PIXELS"]
 
 #: The (2, 3) identity motion: a MotionBit without motion this frame stands still.
 STILL = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
@@ -109,11 +109,10 @@ CONVEX_AREA_RATIO = 4.0
 #: colour but for the light: median chromaticities within
 #: :data:`motionbits.revealed.SHADOW_CHROMA` (a face turned from the light is darker, not
 #: of another colour), each unlike the unlabelled surface around them by as much (a
-#: shadow on the table has the table's colour). Round 59, the last frames of held28 + four
-#: older folders (555 bodies): of the touching pairs of marks at rest that fill 80-90% of
-#: their hull, those of one colour were 21 pairs of faces of one body and 1 other pair;
-#: faces marked apart at the hull's 0.8-0.9 (a spill, a rounded cylinder top) cost about
-#: 1 mIoU point.
+#: shadow on the table has the table's colour). Round 59, the last frames of held25-held28
+#: (555 bodies): of the touching pairs of marks away from the agent that fill 80% of their
+#: hull or more, those of one colour were 21 pairs of faces of one body and 1 pair of a
+#: block and a mark of the table's colour beside it (docs/results.md, round 59).
 FACES_SOLIDITY = 0.8
 #: px: the ring around the two marks whose colour they must not have.
 FACES_RING = 5

@@ -69,9 +69,9 @@ WINDOW = 3
 NEW_SHARE = 0.5
 #: At the next frame it is confirmed if it still holds this share of its area.
 REST_SHARE = 0.5
-#: A piece set down or found at rest otherwise (:meth:`SetDown._hold`) is shown at once if an opening
-#: by a square of this many grid cells keeps ``COMPACT_SHARE`` of it (a block, not the
-#: sliver a moving shadow's edge leaves) ...
+#: A piece set down or found at rest otherwise (:meth:`SetDown._hold`) is shown at once if
+#: an opening by a square of this many grid cells keeps ``COMPACT_SHARE`` of it (a block,
+#: not the sliver a moving shadow's edge leaves) ...
 SOLID_CELLS = 2
 #: ... and moving MotionBits hold less than this share of the ring around it.
 BESIDE_MOVING_SHARE = 1 / 3
