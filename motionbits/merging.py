@@ -257,8 +257,9 @@ def join_convex(shown: np.ndarray, rgb: np.ndarray, moving: Collection[int],
         if a in moving or b in moving or groups.known(a, b):
             continue
         (ra, ca), (rb, cb) = boxes[a - 1], boxes[b - 1]
-        sub = shown[min(ra.start, rb.start):max(ra.stop, rb.stop),
-                    min(ca.start, cb.start):max(ca.stop, cb.stop)]
+        pair_box = (slice(min(ra.start, rb.start), max(ra.stop, rb.stop)),
+                    slice(min(ca.start, cb.start), max(ca.stop, cb.stop)))
+        sub = shown[pair_box]
         mask_a, mask_b = (sub == a).view(np.uint8), (sub == b).view(np.uint8)
         area_a, area_b = np.count_nonzero(mask_a), np.count_nonzero(mask_b)
         if max(area_a, area_b) > CONVEX_AREA_RATIO * min(area_a, area_b):
@@ -271,7 +272,7 @@ def join_convex(shown: np.ndarray, rgb: np.ndarray, moving: Collection[int],
         hull = cv2.contourArea(cv2.convexHull(np.vstack(contours)))
         solidity = (area_a + area_b) / max(hull, 1.0)
         if solidity >= CONVEX_SOLIDITY or (solidity >= FACES_SOLIDITY
-                                           and one_colour(shown, rgb, a, b)):
+                                           and one_colour(shown, rgb, a, b, pair_box)):
             groups.observe(a, b, 0.0)
             joined.append((a, b))
     return joined
@@ -316,14 +317,16 @@ def apply_joins(shown: np.ndarray, rep: dict[int, int], pairs: list[tuple[int, i
     return lut[shown], {i: final.get(r, r) for i, r in rep.items()}
 
 
-def one_colour(shown: np.ndarray, rgb: np.ndarray, a: int, b: int) -> bool:
-    """Whether marks ``a`` and ``b`` of ``shown`` ((H, W) int32) have one colour in
-    ``rgb`` ((H, W, 3) uint8) but for the light, and not the colour of the unlabelled
-    surface within ``FACES_RING`` px of them: their median chromaticities (each channel over
-    the sum of the three, pixels whose sum is at least ``SHADOW_MIN_SUM``) lie within
-    ``SHADOW_CHROMA`` of each other and at least that far from the surface's. False where
-    any of the three has fewer than ``FACES_MIN_PIXELS`` such pixels."""
-    box = grow_box(nonzero_box((shown == a) | (shown == b)), FACES_RING, shown.shape)
+def one_colour(shown: np.ndarray, rgb: np.ndarray, a: int, b: int,
+               box: tuple[slice, slice]) -> bool:
+    """Whether marks ``a`` and ``b`` of ``shown`` ((H, W) int32; ``box``: the image box
+    holding both) have one colour in ``rgb`` ((H, W, 3) uint8) but for the light, and not
+    the colour of the unlabelled surface within ``FACES_RING`` px of them: their median
+    chromaticities (each channel over the sum of the three, pixels whose sum is at least
+    ``SHADOW_MIN_SUM``) lie within ``SHADOW_CHROMA`` of each other and at least that far
+    from the surface's. False where any of the three has fewer than ``FACES_MIN_PIXELS``
+    such pixels."""
+    box = grow_box(box, FACES_RING, shown.shape)
     sub = shown[box]
     pair = ((sub == a) | (sub == b)).view(np.uint8)
     side = 2 * FACES_RING + 1
