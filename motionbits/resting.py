@@ -2,8 +2,9 @@
 
 A MotionBit at rest keeps its pixels in the segmenter's state, but the mark shown for it
 is remade at every frame from those pixels: trimmed to the image's edges, cleared of flat
-overhangs, hidden when small, completed by colour. On a body that stands still under an
-unchanged image these steps should give the same mark at every frame; they do not. Each
+overhangs, hidden when small, completed by colour, hidden when only a stripe is left. On
+a body that stands still under an unchanged image these steps should give the same mark
+at every frame; they do not. Each
 turns on the exact outline of the state's mask, which the flow frays by a pixel or two a
 frame, so the mark of a block set down flickers between whole and gone (a block completed
 to IoU 0.89 at one frame had its 303 px of state trimmed to 58 and hidden at the next).

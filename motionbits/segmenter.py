@@ -576,10 +576,15 @@ class MotionBitsSegmenter:
                                          gradient, first_look)
             # without the static world under a cast shadow (which moves with its body)
             shown = trim_shadows(shown, shadows)
+            # stripes are not a body (the flow along a wood grain's lines)
+            thin_side = int(np.ceil(max(grid.cell)))
+            shown = hide_thin(shown, thin_side)
             # a mark at rest that the steps above hid (they turn on the state's frayed
-            # outline), on a body and an image that did not change, is shown as it was
+            # outline), on a body and an image that did not change, is shown as it was --
+            # where other marks left room: what is held is a stripe no more than they are
             still_marks = {r for r in rep.values() if r} - moving_marks
-            shown = self._rest_marks.hold(shown, cur, state, still_marks)
+            held = self._rest_marks.hold(shown, cur, state, still_marks)
+            shown = held if held is shown else hide_thin(held, thin_side)
             # nothing moved where a mark stands as first seen (a static body marked through
             # parallax or smeared flow) -- unless its body's own motion since its birth
             # explains it better than the static world (a block nudged less than its size
@@ -589,8 +594,6 @@ class MotionBitsSegmenter:
                 moved = moved_marks(shown, with_links, self._origins, moving)
                 shown = drop_labels(shown, self._first_look.as_first_seen(shown, cur, moved))
                 shown = drop_labels(shown, self._first_look.uncovered(shown, cur, still_marks))
-            # stripes are not a body (the flow along a wood grain's lines)
-            shown = hide_thin(shown, int(np.ceil(max(grid.cell))))
             # marks at rest side by side that make one convex body are one (its faces,
             # marked apart and set down: nothing moves to tell); a mark moves here when
             # most of it does

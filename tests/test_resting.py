@@ -80,3 +80,34 @@ def marks_hold(marks: RestingMarks, shown: np.ndarray, rgb: np.ndarray, state: n
                resting: set[int]) -> np.ndarray:
     """(H, W) bool: the pixels shown as mark 4."""
     return marks.hold(shown, rgb, state, resting) == 4
+
+
+def test_the_segmenter_holds_a_resting_mark_that_the_stripe_test_hid(monkeypatch):
+    """The stripe test (``hide_thin``) turns on the trimmed outline too: a resting body's
+    mark trimmed to a sliver and hidden by it is held like one the earlier steps hid
+    (round 60: a block whose top the flat-background trim cut to a band); what is held
+    is tested for stripes again."""
+    import motionbits.segmenter as segmenter
+    from motionbits import MotionBitsSegmenter
+    from motionbits.synth import demo_clip
+
+    clip = demo_clip(n_frames=16)
+    seg = MotionBitsSegmenter()
+    for frame in clip.frames[:-1]:
+        seg.update(frame)
+    calls = []
+
+    def hide_all_first(labels, side):  # the stripe test hides every mark before the hold
+        calls.append(side)
+        return np.zeros_like(labels) if len(calls) == 1 else labels
+
+    monkeypatch.setattr(segmenter, "hide_thin", hide_all_first)
+    last = seg.update(clip.frames[-1]).labels
+    stopped = clip.gt == 6  # GT body 6 moves, then stops: at rest at the last frame
+    ids, counts = np.unique(last[stopped], return_counts=True)
+    held = int(ids[np.argmax(counts)])
+    assert held != 0
+    assert ((last == held) & stopped).sum() / ((last == held) | stopped).sum() >= 0.85
+    # the bodies still moving at the last frame are not held: every other mark is gone
+    assert set(np.unique(last)) <= {0, held}
+    assert len(calls) == 2  # once before the hold, once on what it held
