@@ -69,7 +69,7 @@ class RestingMarks:
             self._rgb = follow_look(self._rgb, world)
 
     def hold(self, shown: np.ndarray, rgb: np.ndarray, state: np.ndarray,
-             resting: Collection[int]) -> np.ndarray:
+             resting: Collection[int], min_area: float = 0.0) -> np.ndarray:
         """The shown marks with each resting mark hidden since the last frame, on a body
         and an image that did not change, as it was (module docstring); then remembered
         for the next frame.
@@ -79,6 +79,9 @@ class RestingMarks:
             rgb: (H, W, 3) uint8 frame at the same size.
             state: (H, W) int32 the segmenter's labels as shown (group representatives).
             resting: shown labels whose MotionBits all stand still now.
+            min_area: px; a mark is held only where it gets back at least this many
+                pixels (others may have taken some of its last frame's): the segmenter
+                shows no smaller mark (``MIN_SHOWN_CELLS``). Default: any size.
 
         Returns:
             (H, W) int32 label map (``shown`` itself where no mark is held).
@@ -102,9 +105,12 @@ class RestingMarks:
                 change = _change(rgb[box], self._rgb[box])[was]
                 if np.count_nonzero(change > RECALL_LEVEL) > CHANGED * size:
                     continue
+                back = was & (out[box] == 0)
+                if np.count_nonzero(back) < min_area:
+                    continue
                 if out is shown:
                     out = shown.copy()
-                out[box][was & (out[box] == 0)] = label
+                out[box][back] = label
         self._shown, self._rgb = out, rgb.copy()
         self._areas = now_shown if out is shown else label_areas(out)
         return out

@@ -581,9 +581,10 @@ class MotionBitsSegmenter:
             shown = hide_thin(shown, thin_side)
             # a mark at rest that the steps above hid (they turn on the state's frayed
             # outline), on a body and an image that did not change, is shown as it was --
-            # where other marks left room: what is held is a stripe no more than they are
+            # where other marks left room: what is held is no smaller and no more a stripe
+            # than they are
             still_marks = {r for r in rep.values() if r} - moving_marks
-            held = self._rest_marks.hold(shown, cur, state, still_marks)
+            held = self._rest_marks.hold(shown, cur, state, still_marks, min_shown)
             shown = held if held is shown else hide_thin(held, thin_side)
             # nothing moved where a mark stands as first seen (a static body marked through
             # parallax or smeared flow) -- unless its body's own motion since its birth

@@ -56,6 +56,17 @@ def test_it_is_not_held_where_the_image_changed_the_body_moved_or_moves_now():
     assert not marks_hold(_remembered(rgb, body), hidden, rgb, gone, {4}).any()
 
 
+def test_a_mark_is_held_only_where_it_gets_back_the_smallest_mark_s_area():
+    rgb, body = _scene()  # the block: 60 x 60 = 3600 px
+    state = np.zeros(body.shape, np.int32)
+    state[120:140, 120:180] = 4
+    shown = np.zeros(body.shape, np.int32)
+    shown[80:135, 120:180] = 9  # another mark took most of its pixels: 300 px are left
+    assert (marks_hold(_remembered(rgb, body), shown, rgb, state, {4}, 300)
+            == body & ~(shown > 0)).all()
+    assert not marks_hold(_remembered(rgb, body), shown, rgb, state, {4}, 301).any()
+
+
 def test_a_mark_still_shown_is_left_as_the_steps_give_it_even_if_smaller():
     rgb, body = _scene()
     marks = _remembered(rgb, body)
@@ -77,9 +88,9 @@ def test_under_a_moving_camera_the_memory_follows_the_static_world():
 
 
 def marks_hold(marks: RestingMarks, shown: np.ndarray, rgb: np.ndarray, state: np.ndarray,
-               resting: set[int]) -> np.ndarray:
+               resting: set[int], min_area: float = 0.0) -> np.ndarray:
     """(H, W) bool: the pixels shown as mark 4."""
-    return marks.hold(shown, rgb, state, resting) == 4
+    return marks.hold(shown, rgb, state, resting, min_area) == 4
 
 
 def test_the_segmenter_holds_a_resting_mark_that_the_stripe_test_hid(monkeypatch):
