@@ -56,6 +56,17 @@ def test_it_is_not_held_where_the_image_changed_the_body_moved_or_moves_now():
     assert not marks_hold(_remembered(rgb, body), hidden, rgb, gone, {4}).any()
 
 
+def test_the_state_a_pixel_or_two_off_the_mark_still_holds_it_there():
+    rgb, body = _scene()  # the block's mark: rows 80:140
+    hidden = np.zeros(body.shape, np.int32)
+    frayed = np.zeros(body.shape, np.int32)
+    frayed[139:143, 120:180] = 4  # one row inside the mark, three just below it
+    assert (marks_hold(_remembered(rgb, body), hidden, rgb, frayed, {4}) == body).all()
+    below = np.zeros(body.shape, np.int32)
+    below[143:147, 120:180] = 4  # 3-6 px below it: the body moved
+    assert not marks_hold(_remembered(rgb, body), hidden, rgb, below, {4}).any()
+
+
 def test_a_mark_is_held_only_where_it_gets_back_the_smallest_mark_s_area():
     rgb, body = _scene()  # the block: 60 x 60 = 3600 px
     state = np.zeros(body.shape, np.int32)
