@@ -16,9 +16,8 @@ where another mark has not taken those pixels, when
 - its mark is hidden now (a mark that only shrank is left as the steps give it: holding
   the larger mark of the last frame held a spill onto the table as well, and pickplace
   lost 1.7 mIoU),
-- the state still holds it mostly where that mark was (``WHERE_IT_WAS`` of its pixels
-  lie within ``FRAY`` px of it: the outline frays; round 60): the body has not moved,
-  and
+- the state still holds it mostly where that mark was (``WHERE_IT_WAS`` of its pixels):
+  the body has not moved, and
 - the image under that mark has not changed: at most ``CHANGED`` of its pixels differ
   by more than :data:`motionbits.completion.RECALL_LEVEL` grey levels (any channel) from
   every pixel within ``REACH`` px of theirs in the last frame (a hand passing in front, a
@@ -38,11 +37,12 @@ from collections.abc import Collection
 import cv2
 import numpy as np
 
-from motionbits.boxes import grow_box, label_areas, label_boxes
+from motionbits.boxes import label_areas, label_boxes
 from motionbits.completion import RECALL_LEVEL
+from motionbits.masks import drop_labels, hide_edgeless, hide_thin
 from motionbits.revealed import follow_ids, follow_look
 
-__all__ = ["RestingMarks", "WHERE_IT_WAS", "FRAY", "CHANGED", "REACH"]
+__all__ = ["RestingMarks", "looks_tested", "WHERE_IT_WAS", "CHANGED", "REACH"]
 
 #: Share of a resting MotionBit's state pixels that must lie within its last mark.
 WHERE_IT_WAS = 0.5
@@ -52,11 +52,6 @@ CHANGED = 0.1
 #: px: a pixel has not changed if it lies within the range of the last frame's pixels
 #: this near (+ ``RECALL_LEVEL``).
 REACH = 1
-#: px: the state's pixels this near the last frame's mark count as where it was (round
-#: 60: a block's state frayed to 128 of 263 px inside its mark, 49% against 50%, and its
-#: mark was not held).
-FRAY = 2
-_FRAY_SQUARE = np.ones((2 * FRAY + 1, 2 * FRAY + 1), np.uint8)
 
 
 class RestingMarks:
@@ -105,10 +100,7 @@ class RestingMarks:
                 box = boxes[label - 1]
                 was = before[box] == label
                 size = was_shown[label]
-                # (the state within FRAY px of the mark: the flow frays its outline)
-                grown = grow_box(box, FRAY, before.shape)
-                near = cv2.dilate((before[grown] == label).view(np.uint8), _FRAY_SQUARE) > 0
-                held_there = np.count_nonzero((state[grown] == label) & near)
+                held_there = np.count_nonzero((state[box] == label) & was)
                 if held_there == 0 or held_there < WHERE_IT_WAS * in_state[label]:
                     continue
                 change = _change(rgb[box], self._rgb[box])[was]
@@ -123,6 +115,29 @@ class RestingMarks:
         self._shown, self._rgb = out, rgb.copy()
         self._areas = now_shown if out is shown else label_areas(out)
         return out
+
+
+def looks_tested(held: np.ndarray, shown: np.ndarray, gradient: np.ndarray,
+                 thin_side: int) -> np.ndarray:
+    """``held`` without the marks :meth:`RestingMarks.hold` gave back whose outline is no
+    image edge (:func:`motionbits.masks.hide_edgeless`) or that are stripes
+    (:func:`motionbits.masks.hide_thin`): the tests on a mark's own look, taken by those
+    marks alone (round 60: an unchanged patch of plain table, a ghost's mark, was held
+    for nine frames on ``02_cups.mp4``; a sliver of a mark, where others took the rest).
+
+    Args:
+        held: (H, W) int32 marks returned by :meth:`RestingMarks.hold`.
+        shown: (H, W) int32 marks passed to it.
+        gradient: (H, W) float32 image gradient (grey levels per px).
+        thin_side: px, :func:`motionbits.masks.hide_thin`'s square.
+
+    Returns:
+        (H, W) int32 label map.
+    """
+    back = np.unique(held[held != shown])
+    alone = np.where(np.isin(held, back), held, 0)
+    kept = np.flatnonzero(label_areas(hide_thin(hide_edgeless(alone, gradient), thin_side)))
+    return drop_labels(held, np.setdiff1d(back, kept))
 
 
 def _change(now: np.ndarray, then: np.ndarray) -> np.ndarray:

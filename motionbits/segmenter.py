@@ -53,7 +53,7 @@ from motionbits.parallax import ParallaxOnly
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
-from motionbits.resting import RestingMarks
+from motionbits.resting import RestingMarks, looks_tested
 from motionbits.retirement import (APART_CELLS, Origin, moved_marks, moved_once, retire,
                                    retire_shadows)
 from motionbits.revealed import StaticMemory, carry_at_rest, grey_change
@@ -581,11 +581,12 @@ class MotionBitsSegmenter:
             shown = hide_thin(shown, thin_side)
             # a mark at rest that the steps above hid (they turn on the state's frayed
             # outline), on a body and an image that did not change, is shown as it was --
-            # where other marks left room: what is held is no smaller and no more a stripe
-            # than they are
+            # where other marks left room, and no smaller than they may be; what is held
+            # passes the tests on a mark's own look again (an outline on image edges, not
+            # a stripe: an unchanged patch of plain table is no body)
             still_marks = {r for r in rep.values() if r} - moving_marks
             held = self._rest_marks.hold(shown, cur, state, still_marks, min_shown)
-            shown = held if held is shown else hide_thin(held, thin_side)
+            shown = held if held is shown else looks_tested(held, shown, gradient, thin_side)
             # nothing moved where a mark stands as first seen (a static body marked through
             # parallax or smeared flow) -- unless its body's own motion since its birth
             # explains it better than the static world (a block nudged less than its size
