@@ -121,9 +121,10 @@ def looks_tested(held: np.ndarray, shown: np.ndarray, gradient: np.ndarray,
                  thin_side: int) -> np.ndarray:
     """``held`` without the marks :meth:`RestingMarks.hold` gave back whose outline is no
     image edge (:func:`motionbits.masks.hide_edgeless`) or that are stripes
-    (:func:`motionbits.masks.hide_thin`): the tests on a mark's own look, taken by those
-    marks alone (round 60: an unchanged patch of plain table, a ghost's mark, was held
-    for nine frames on ``02_cups.mp4``; a sliver of a mark, where others took the rest).
+    (:func:`motionbits.masks.hide_thin`): the tests on a mark's own look, which the hold
+    skips, taken by those marks alone (the others are as the steps gave them). A mark is
+    given back only where other marks left room: what is left can be a sliver (round 60:
+    a 79-px one on a static block's top edge, on a robot scene).
 
     Args:
         held: (H, W) int32 marks returned by :meth:`RestingMarks.hold`.

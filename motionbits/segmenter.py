@@ -583,7 +583,7 @@ class MotionBitsSegmenter:
             # outline), on a body and an image that did not change, is shown as it was --
             # where other marks left room, and no smaller than they may be; what is held
             # passes the tests on a mark's own look again (an outline on image edges, not
-            # a stripe: an unchanged patch of plain table is no body)
+            # a stripe)
             still_marks = {r for r in rep.values() if r} - moving_marks
             held = self._rest_marks.hold(shown, cur, state, still_marks, min_shown)
             shown = held if held is shown else looks_tested(held, shown, gradient, thin_side)
