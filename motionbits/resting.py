@@ -70,7 +70,8 @@ class RestingMarks:
             self._rgb = follow_look(self._rgb, world)
 
     def hold(self, shown: np.ndarray, rgb: np.ndarray, state: np.ndarray,
-             resting: Collection[int], min_area: float = 0.0) -> np.ndarray:
+             resting: Collection[int], min_area: float = 0.0
+             ) -> tuple[np.ndarray, list[int]]:
         """The shown marks with each resting mark hidden since the last frame, on a body
         and an image that did not change, as it was (module docstring); then remembered
         for the next frame.
@@ -85,9 +86,11 @@ class RestingMarks:
                 shows no smaller mark (``MIN_SHOWN_CELLS``). Default: any size.
 
         Returns:
-            (H, W) int32 label map (``shown`` itself where no mark is held).
+            (H, W) int32 label map (``shown`` itself where no mark is held), and the
+            labels given back.
         """
         out = shown
+        given = []
         now_shown = label_areas(shown)
         if self._shown is not None and self._shown.shape == shown.shape:
             before = self._shown
@@ -112,33 +115,33 @@ class RestingMarks:
                 if out is shown:
                     out = shown.copy()
                 out[box][back] = label
+                given.append(label)
         self._shown, self._rgb = out, rgb.copy()
         self._areas = now_shown if out is shown else label_areas(out)
-        return out
+        return out, given
 
 
-def looks_tested(held: np.ndarray, shown: np.ndarray, gradient: np.ndarray,
+def looks_tested(held: np.ndarray, given: list[int], gradient: np.ndarray,
                  thin_side: int) -> np.ndarray:
-    """``held`` without the marks :meth:`RestingMarks.hold` gave back whose outline is no
-    image edge (:func:`motionbits.masks.hide_edgeless`) or that are stripes
+    """``held`` without the marks :meth:`RestingMarks.hold` gave back (``given``) whose
+    outline is no image edge (:func:`motionbits.masks.hide_edgeless`) or that are stripes
     (:func:`motionbits.masks.hide_thin`): the tests on a mark's own look, which the hold
     skips, taken by those marks alone (the others are as the steps gave them). A mark is
     given back only where other marks left room: what is left can be a sliver (round 60:
     a 79-px one on a static block's top edge, on a robot scene).
 
     Args:
-        held: (H, W) int32 marks returned by :meth:`RestingMarks.hold`.
-        shown: (H, W) int32 marks passed to it.
+        held, given: the marks and the labels given back that :meth:`RestingMarks.hold`
+            returned.
         gradient: (H, W) float32 image gradient (grey levels per px).
         thin_side: px, :func:`motionbits.masks.hide_thin`'s square.
 
     Returns:
         (H, W) int32 label map.
     """
-    back = np.unique(held[held != shown])
-    alone = np.where(np.isin(held, back), held, 0)
+    alone = np.where(np.isin(held, given), held, 0)
     kept = np.flatnonzero(label_areas(hide_thin(hide_edgeless(alone, gradient), thin_side)))
-    return drop_labels(held, np.setdiff1d(back, kept))
+    return drop_labels(held, np.setdiff1d(given, kept))
 
 
 def _change(now: np.ndarray, then: np.ndarray) -> np.ndarray:

@@ -585,8 +585,8 @@ class MotionBitsSegmenter:
             # passes the tests on a mark's own look again (an outline on image edges, not
             # a stripe)
             still_marks = {r for r in rep.values() if r} - moving_marks
-            held = self._rest_marks.hold(shown, cur, state, still_marks, min_shown)
-            shown = held if held is shown else looks_tested(held, shown, gradient, thin_side)
+            held, given = self._rest_marks.hold(shown, cur, state, still_marks, min_shown)
+            shown = looks_tested(held, given, gradient, thin_side) if given else held
             # nothing moved where a mark stands as first seen (a static body marked through
             # parallax or smeared flow) -- unless its body's own motion since its birth
             # explains it better than the static world (a block nudged less than its size

@@ -25,7 +25,8 @@ def _remembered(rgb: np.ndarray, body: np.ndarray) -> RestingMarks:
     """A memory that showed the block whole as mark 4 at the last frame."""
     marks = RestingMarks()
     shown = np.where(body, 4, 0).astype(np.int32)
-    assert marks.hold(shown, rgb, shown, {4}) is shown  # nothing remembered yet
+    out, given = marks.hold(shown, rgb, shown, {4})
+    assert out is shown and given == []  # nothing remembered yet
     return marks
 
 
@@ -35,10 +36,10 @@ def test_a_resting_mark_hidden_on_an_unchanged_body_is_shown_as_it_was():
     state = np.zeros(body.shape, np.int32)
     state[120:140, 120:180] = 4  # the state keeps a frayed part of the block
     hidden = np.zeros(body.shape, np.int32)  # ... that the shown steps hid
-    out = marks.hold(hidden, rgb, state, {4})
-    assert ((out == 4) == body).all()
+    out, given = marks.hold(hidden, rgb, state, {4})
+    assert ((out == 4) == body).all() and given == [4]
     # ... and it is remembered so for the next frame
-    assert ((marks.hold(hidden, rgb, state, {4}) == 4) == body).all()
+    assert ((marks.hold(hidden, rgb, state, {4})[0] == 4) == body).all()
 
 
 def test_it_is_not_held_where_the_image_changed_the_body_moved_or_moves_now():
@@ -73,7 +74,8 @@ def test_a_mark_still_shown_is_left_as_the_steps_give_it_even_if_smaller():
     marks = _remembered(rgb, body)
     shown = np.zeros(body.shape, np.int32)
     shown[100:140, 120:180] = 4
-    assert marks.hold(shown, rgb, shown, {4}) is shown
+    out, given = marks.hold(shown, rgb, shown, {4})
+    assert out is shown and given == []
 
 
 def test_under_a_moving_camera_the_memory_follows_the_static_world():
@@ -84,7 +86,7 @@ def test_under_a_moving_camera_the_memory_follows_the_static_world():
     xs, ys = np.meshgrid(np.arange(320, dtype=np.float32), np.arange(240, dtype=np.float32))
     marks.follow(np.dstack([xs - 6, ys]))
     state = np.where(moved_body, 4, 0).astype(np.int32)
-    out = marks.hold(np.zeros(body.shape, np.int32), moved, state, {4})
+    out, _ = marks.hold(np.zeros(body.shape, np.int32), moved, state, {4})
     assert ((out == 4) == moved_body).all()
 
 
@@ -95,21 +97,21 @@ def test_looks_tested_drops_held_marks_without_an_edge_or_that_are_stripes():
     shown[20:60, 20:60] = 7  # a mark shown as the steps gave it: not tested again
     held = shown.copy()
     held[body] = 4  # the block, given back: its outline is the block's edge
-    assert (looks_tested(held, shown, gradient, 7) == held).all()
+    assert (looks_tested(held, [4], gradient, 7) == held).all()
     flat = np.zeros(body.shape, bool)
     flat[95:125, 135:165] = True  # inside the red block's flat face: no edge
     plain = shown.copy()
     plain[flat] = 4
-    assert (looks_tested(plain, shown, gradient, 7) == shown).all()
+    assert (looks_tested(plain, [4], gradient, 7) == shown).all()
     stripe = shown.copy()
     stripe[80:140, 120:123] = 4  # 3 px wide along the block's edge
-    assert (looks_tested(stripe, shown, gradient, 7) == shown).all()
+    assert (looks_tested(stripe, [4], gradient, 7) == shown).all()
 
 
 def marks_hold(marks: RestingMarks, shown: np.ndarray, rgb: np.ndarray, state: np.ndarray,
                resting: set[int], min_area: float = 0.0) -> np.ndarray:
     """(H, W) bool: the pixels shown as mark 4."""
-    return marks.hold(shown, rgb, state, resting, min_area) == 4
+    return marks.hold(shown, rgb, state, resting, min_area)[0] == 4
 
 
 def test_the_segmenter_holds_a_resting_mark_that_the_stripe_test_hid(monkeypatch):
