@@ -19,12 +19,14 @@ import cv2
 import numpy as np
 
 from motionbits.boxes import grow_box, label_areas, label_boxes, nonzero_box, run_counts
+from motionbits.evidence import photometric_residual
 from motionbits.masks import drop_labels
 from motionbits.revealed import StaticMemory
 from motionbits.twists import rigid_matrix
 
 __all__ = ["APART_CELLS", "NEAR_WORLD", "OWN_SHARE", "Origin", "origin_residuals", "moved_once",
-           "moved_marks", "retire", "retire_shadows"]
+           "moved_marks", "retire", "retire_shadows", "CarriedBodies", "BODY_CELLS",
+           "BODY_SOLID_CELLS", "BODY_SHARE", "BODY_NEW_SHARE"]
 
 #: px: below this median distance between where a MotionBit's own and the world's
 #: accumulated motions put its pixels, the two cannot be told apart (no verdict).
@@ -43,6 +45,16 @@ SHADOW_AGE = 5
 #: frame) reads as one only once it has moved onto wall seen lit. On seeds 0 and 11 (70 +
 #: 60 robot / hand scenes) an arm's dark link read up to 0.38, wall shadows 0.5-0.6.
 OLD_SHADOW_SHARE = 0.5
+#: A MotionBit found to be a moving cast shadow keeps the body it carried with its shadow
+#: (:class:`CarriedBodies`): what is left of it without the pixels that look shadowed, once
+#: opened by a square of ``BODY_SOLID_CELLS`` grid cells, if that keeps ``BODY_SHARE`` of
+#: it and covers at least ``BODY_CELLS`` grid cells ...
+BODY_SOLID_CELLS = 1
+BODY_SHARE = 0.5
+BODY_CELLS = 8
+#: ... more than this share of it looks unlike the static world last seen there, and its
+#: MotionBit's motion explains it better than standing still.
+BODY_NEW_SHARE = 0.5
 #: Grid cells around a MotionBit born at the last frame, now at rest, within which no
 #: MotionBit may move for its one frame of motion to stand (:func:`moved_once`) ...
 APART_CELLS = 7.5
@@ -282,9 +294,56 @@ def moved_marks(shown: np.ndarray, labels: np.ndarray, origins: dict[int, Origin
     return {int(i) for i in np.flatnonzero(2 * held > area)}
 
 
+@dataclass(frozen=True)
+class CarriedBodies:
+    """The bodies that MotionBits found to be moving cast shadows carried (ours, round 61).
+
+    A block carried or pushed low over the table moves with its own shadow, and the flow
+    clusters both into one MotionBit; once the shadow is most of it, the whole MotionBit
+    was retired as a cast shadow, the block with it (held30: a carried block of 6,756 px
+    gone at the clip's last frame). What is left of such a MotionBit without its shadowed
+    pixels stays a MotionBit when it is a body: solid, unlike the static world last seen
+    there, and moved by the MotionBit's motion. A shadow's own leftovers (its penumbra, the
+    table it has just uncovered, flat and looking as remembered) are none of these.
+
+    Args:
+        cell: (w, h) px of one grid cell.
+        cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
+        motions: id -> (2, 3) backward motion (relative to the camera) of each MotionBit
+            with a cluster now.
+        evidence: grey levels (3x3 mean, config ``pixel_evidence``) by which the motion
+            must explain the body better than standing still.
+    """
+
+    cell: tuple[float, float]
+    cur: np.ndarray
+    prev: np.ndarray
+    motions: dict[int, np.ndarray]
+    evidence: float
+
+    def body(self, rest: np.ndarray, lab: int, box: tuple[slice, slice],
+             changed: np.ndarray) -> np.ndarray | None:
+        """The body in ``rest`` ((h, w) bool on the image ``box``: MotionBit ``lab``'s
+        pixels that do not look shadowed), or None. ``changed``: (H, W) bool, pixels that
+        look unlike the static world last seen there (:meth:`StaticMemory.changed`)."""
+        if lab not in self.motions:
+            return None
+        side = max(1, int(round(BODY_SOLID_CELLS * max(self.cell))))
+        body = cv2.morphologyEx(rest.view(np.uint8), cv2.MORPH_OPEN,
+                                np.ones((side, side), np.uint8)) > 0
+        n = np.count_nonzero(body)
+        if (n < BODY_CELLS * self.cell[0] * self.cell[1]
+                or n < BODY_SHARE * np.count_nonzero(rest)
+                or changed[box][body].mean() <= BODY_NEW_SHARE):
+            return None
+        still = photometric_residual(self.cur, self.prev, IDENTITY[:2], box)[body].mean()
+        moved = photometric_residual(self.cur, self.prev, self.motions[lab], box)[body].mean()
+        return body if still - moved > self.evidence else None
+
+
 def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
-                   moving: set[int], first_moved: dict[int, int], frame_index: int
-                   ) -> np.ndarray:
+                   moving: set[int], first_moved: dict[int, int], frame_index: int,
+                   carried: CarriedBodies | None = None) -> np.ndarray:
     """``labels`` without the MotionBits that are moving cast shadows: MotionBits moving
     now, since at most ``SHADOW_AGE`` frames, more than ``SHADOW_SHARE`` of whose pixels
     show the static world as ``memory`` remembers it, only darker, with its colour and
@@ -297,7 +356,10 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     the flow follows the shadow's edge across it all the same, the memory holds the body's
     own look, remembered with its id at rest, and those pixels do not count. One that has
     moved for longer has shown it is a body (it must look shadowed over more of its
-    pixels).
+    pixels). Given ``carried``, a MotionBit so found keeps the body it carried with its
+    shadow (:class:`CarriedBodies`): its pixels that look neither shadowed nor darker with
+    the remembered colour (:meth:`StaticMemory.darker`, the texture lost in the shadow's
+    dark or penumbra) and make a body; the rest of it is retired.
 
     Args:
         labels: (H, W) int32 label map of this frame.
@@ -306,6 +368,7 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
         moving: ids of the MotionBits moving now.
         first_moved: id -> the frame it first moved (:attr:`MotionSpans.first`).
         frame_index: this frame's index.
+        carried: the test of what such a MotionBit keeps; None: nothing (retired whole).
 
     Returns:
         (H, W) int32 label map (``labels`` itself when nothing is retired).
@@ -329,6 +392,7 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
              if sum(_box_area(boxes[i - 1]) for i in tested) < _box_area(union)
              else [(union, tested)])
     gone = []
+    out = labels
     for box, members in parts:
         # not where the memory holds a MotionBit's own look (its body, seen at rest): the
         # flow may follow a passing shadow's edge across it
@@ -338,8 +402,20 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
         lab = labels[box]
         area = label_areas(lab)
         dark = run_counts(lab[shadow], len(area))
-        gone += [i for i in members if dark[i] > share[i] * area[i]]
-    return drop_labels(labels, gone)
+        found = [i for i in members if dark[i] > share[i] * area[i]]
+        if carried is None or not found:
+            gone += found
+            continue
+        lit, changed = ~(shadow | memory.darker(cur, box)), memory.changed()
+        for i in found:
+            body = carried.body((lab == i) & lit, i, box, changed)
+            if body is None:
+                gone.append(i)
+                continue
+            if out is labels:
+                out = labels.copy()
+            out[box][(lab == i) & ~body] = 0
+    return drop_labels(out, gone)
 
 
 def _box_area(box: tuple[slice, slice]) -> int:

@@ -54,14 +54,15 @@ from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
 from motionbits.resting import RestingMarks, looks_tested
-from motionbits.retirement import (APART_CELLS, Origin, moved_marks, moved_once, retire,
-                                   retire_shadows)
+from motionbits.retirement import (APART_CELLS, CarriedBodies, Origin, moved_marks, moved_once,
+                                   retire, retire_shadows)
 from motionbits.revealed import StaticMemory, carry_at_rest, grey_change
 from motionbits.second_thread import Task, second_thread
 from motionbits.setdown import SetDown
 from motionbits.shadows import cast_shadows, shadow_map, trim_shadows
 from motionbits.temporal import TemporalState
-from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
+from motionbits.twists import (fit_local_motions, nodes_to_fit, refine_moving_motions,
+                               rigid_matrix)
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
@@ -507,8 +508,13 @@ class MotionBitsSegmenter:
                                            first_new, cam, raw_prev_g, cur_g, cfg.retire_margin,
                                            explained=cfg.carry_tolerance,
                                            first=self._first)
+            # (a MotionBit found to be a cast shadow keeps the body it carried with it)
             labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
-                                    self.frame_index)
+                                    self.frame_index, CarriedBodies(
+                                        grid.cell, cur_g, prev_g,
+                                        {int(i): rigid_matrix(th, t)
+                                         for i, th, t in zip(ids, thetas, trans)},
+                                        cfg.pixel_evidence))
             present = (before if labels is observed  # none retired
                        else np.flatnonzero(label_areas(labels)[1:]) + 1)
             self._memory.forget(np.setdiff1d(before, present))  # retired

@@ -11,7 +11,8 @@ from motionbits.completion import FirstLook
 from motionbits.evidence import gradient_magnitude, static_residual
 from motionbits.flow import DISFlow, normalize_contrast
 from motionbits.masks import hide_edgeless, snap_to_edges, trim_flat_background
-from motionbits.retirement import OLD_SHADOW_SHARE, SHADOW_AGE, SHADOW_SHARE, retire_shadows
+from motionbits.retirement import (OLD_SHADOW_SHARE, SHADOW_AGE, SHADOW_SHARE, CarriedBodies,
+                                   retire_shadows)
 from motionbits.revealed import StaticMemory, grey_change
 from motionbits.shadows import BODY_SHARE, cast_shadows, trim_shadows
 from motionbits.synth.planar import Body, Polygon, render_planar_clip
@@ -210,6 +211,40 @@ def test_young_moving_cast_shadows_are_retired_bodies_and_others_kept():
     assert SHADOW_SHARE < share < OLD_SHADOW_SHARE
     assert retire_shadows(half, cur, memory, {1}, old, 1 + SHADOW_AGE).max() == 0
     assert retire_shadows(half, cur, memory, {1}, old, 2 + SHADOW_AGE) is half
+
+
+def test_a_cast_shadow_retired_keeps_the_body_it_carried():
+    """One MotionBit holds a body that moved 4 px to the right and a stretch of the
+    shadow beside it (more than SHADOW_SHARE of it): the shadow goes, the body stays, its
+    id kept. Where the MotionBit's motion does not explain the body better than standing
+    still, or what is left is lit table as remembered, the whole MotionBit goes."""
+    memory, cur = _observing_shadow_and_body()
+    labels = np.zeros(SIZE, np.int32)
+    labels[95:145, 75:125] = 1  # the shadow's core
+    labels[100:160, 200:280] = 1  # the body
+    body = labels == 1
+    body[:, :200] = False
+    prev = cur.copy()
+    prev[100:160, 196:276] = cur[100:160, 200:280]  # one frame ago, 4 px to the left
+    shift = np.array([[1.0, 0.0, -4.0], [0.0, 1.0, 0.0]])  # backward: from 4 px left
+    cell = (5.0, 5.0)
+
+    def carried(motion: np.ndarray) -> CarriedBodies:
+        return CarriedBodies(cell, _gray(cur), _gray(prev), {1: motion}, evidence=3.0)
+
+    share = memory.shadowed(cur, (slice(0, SIZE[0]), slice(0, SIZE[1])))[labels == 1].mean()
+    assert share > SHADOW_SHARE
+    kept = retire_shadows(labels, cur, memory, {1}, {1: 8}, 10, carried(shift)) == 1
+    assert not kept[~body].any() and kept[body].mean() > 0.95
+    assert retire_shadows(labels, cur, memory, {1}, {1: 8}, 10).max() == 0  # no test
+    # a body its motion does not explain (it stood still) is not kept
+    still = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    assert retire_shadows(labels, cur, memory, {1}, {1: 8}, 10, carried(still)).max() == 0
+    # nor the lit table beside the shadow (it looks as remembered)
+    table = np.zeros(SIZE, np.int32)
+    table[95:145, 75:125] = 1
+    table[180:230, 40:120] = 1
+    assert retire_shadows(table, cur, memory, {1}, {1: 8}, 10, carried(shift)).max() == 0
 
 
 def test_a_body_at_rest_that_a_shadow_passes_over_is_not_taken_for_a_shadow():
