@@ -301,10 +301,12 @@ class CarriedBodies:
     A block carried or pushed low over the table moves with its own shadow, and the flow
     clusters both into one MotionBit; once the shadow is most of it, the whole MotionBit
     was retired as a cast shadow, the block with it (held30: a carried block of 6,756 px
-    gone at the clip's last frame). What is left of such a MotionBit without its shadowed
-    pixels stays a MotionBit when it is a body: solid, unlike the static world last seen
-    there, and moved by the MotionBit's motion. A shadow's own leftovers (its penumbra, the
-    table it has just uncovered, flat and looking as remembered) are none of these.
+    gone at the clip's last frame). What is left of such a MotionBit without the pixels
+    that show the remembered colour (under the shadow or another light) stays a MotionBit
+    when it is a body: solid, unlike the static world last seen there, and moved by the
+    MotionBit's motion. A shadow's own leftovers (its penumbra, the table it has just left,
+    of the table's colour) are none of these; a body of the table's colour is retired with
+    its shadow, as before.
 
     Args:
         cell: (w, h) px of one grid cell.
@@ -324,7 +326,8 @@ class CarriedBodies:
     def body(self, rest: np.ndarray, lab: int, box: tuple[slice, slice],
              changed: np.ndarray) -> np.ndarray | None:
         """The body in ``rest`` ((h, w) bool on the image ``box``: MotionBit ``lab``'s
-        pixels that do not look shadowed), or None. ``changed``: (H, W) bool, pixels that
+        pixels that do not look like the static world under a shadow or another light), or
+        None. ``changed``: (H, W) bool, pixels that
         look unlike the static world last seen there (:meth:`StaticMemory.changed`)."""
         if lab not in self.motions:
             return None
@@ -357,9 +360,10 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
     own look, remembered with its id at rest, and those pixels do not count. One that has
     moved for longer has shown it is a body (it must look shadowed over more of its
     pixels). Given ``carried``, a MotionBit so found keeps the body it carried with its
-    shadow (:class:`CarriedBodies`): its pixels that look neither shadowed nor darker with
-    the remembered colour (:meth:`StaticMemory.darker`, the texture lost in the shadow's
-    dark or penumbra) and make a body; the rest of it is retired.
+    shadow (:class:`CarriedBodies`): its pixels that neither look shadowed nor show the
+    remembered colour under another light (:meth:`StaticMemory.same_colour`: a shadow's
+    penumbra or dark, the table a shadow has just left) and make a body; the rest of it is
+    retired.
 
     Args:
         labels: (H, W) int32 label map of this frame.
@@ -406,9 +410,9 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
         if carried is None or not found:
             gone += found
             continue
-        lit, changed = ~(shadow | memory.darker(cur, box)), memory.changed()
+        other, changed = ~(shadow | memory.same_colour(cur, box)), memory.changed()
         for i in found:
-            body = carried.body((lab == i) & lit, i, box, changed)
+            body = carried.body((lab == i) & other, i, box, changed)
             if body is None:
                 gone.append(i)
                 continue

@@ -320,18 +320,17 @@ class StaticMemory:
             shadow &= (self.label[box] != now) | (now == 0)
         return shadow
 
-    def darker(self, cur: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
-        """(h, w) bool on the image box ``box``: remembered pixels that are darker now by a
-        shadow's gain (``SHADOW_GAIN``, over a remembered grey sum above
-        ``SHADOW_MIN_SUM``) with the remembered colour (``SHADOW_CHROMA``), their texture
-        not tested -- a shadow where :meth:`shadowed` cannot see the remembered texture
-        (its penumbra, the texture lost in its dark). All False when the memory does not
+    def same_colour(self, cur: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+        """(h, w) bool on the image box ``box``: remembered pixels (over a remembered grey
+        sum above ``SHADOW_MIN_SUM``) that show the remembered colour now
+        (chromaticity within ``SHADOW_CHROMA``), darker, lighter or as bright -- the
+        static world under a change of light, its texture not tested (a shadow's
+        penumbra, the table a shadow has just left). All False when the memory does not
         hold (:meth:`observe` returned None)."""
         if self._difference is None:
             return np.zeros(cur[box].shape[:2], bool)
-        chroma, gain, _, then = light_change(cur[box], self.color[box])
-        return (self.known[box] & (then > SHADOW_MIN_SUM) & (gain > SHADOW_GAIN[0])
-                & (gain < SHADOW_GAIN[1]) & (chroma < SHADOW_CHROMA))
+        chroma, _, _, then = light_change(cur[box], self.color[box])
+        return self.known[box] & (then > SHADOW_MIN_SUM) & (chroma < SHADOW_CHROMA)
 
     def dimmed_share(self, cur: np.ndarray, labels: np.ndarray, lab: int,
                      box: tuple[slice, slice]) -> float:
