@@ -46,9 +46,9 @@ SHADOW_AGE = 5
 #: 60 robot / hand scenes) an arm's dark link read up to 0.38, wall shadows 0.5-0.6.
 OLD_SHADOW_SHARE = 0.5
 #: A MotionBit found to be a moving cast shadow keeps the body it carried with its shadow
-#: (:class:`CarriedBodies`): what is left of it without the pixels that look shadowed, once
-#: opened by a square of ``BODY_SOLID_CELLS`` grid cells, if that keeps ``BODY_SHARE`` of
-#: it and covers at least ``BODY_CELLS`` grid cells ...
+#: (:class:`CarriedBodies`): what is left of it without the pixels that look shadowed or
+#: show the remembered colour, once opened by a square of ``BODY_SOLID_CELLS`` grid cells,
+#: if that keeps ``BODY_SHARE`` of it and covers at least ``BODY_CELLS`` grid cells ...
 BODY_SOLID_CELLS = 1
 BODY_SHARE = 0.5
 BODY_CELLS = 8
@@ -327,8 +327,8 @@ class CarriedBodies:
              changed: np.ndarray) -> np.ndarray | None:
         """The body in ``rest`` ((h, w) bool on the image ``box``: MotionBit ``lab``'s
         pixels that do not look like the static world under a shadow or another light), or
-        None. ``changed``: (H, W) bool, pixels that
-        look unlike the static world last seen there (:meth:`StaticMemory.changed`)."""
+        None. ``changed``: (H, W) bool, pixels that look unlike the static world last seen
+        there (:meth:`StaticMemory.changed`)."""
         if lab not in self.motions:
             return None
         side = max(1, int(round(BODY_SOLID_CELLS * max(self.cell))))
