@@ -311,8 +311,8 @@ class CarriedBodies:
     Args:
         cell: (w, h) px of one grid cell.
         cur, prev: (H, W) float32 grey frames (``prev`` camera-stabilised).
-        motions: id -> (2, 3) backward motion (relative to the camera) of each MotionBit
-            with a cluster now.
+        ids, thetas, trans: (K,) ids with a cluster now and their backward motions (K,),
+            (K, 2) (relative to the camera).
         evidence: grey levels (3x3 mean, config ``pixel_evidence``) by which the motion
             must explain the body better than standing still.
     """
@@ -320,7 +320,9 @@ class CarriedBodies:
     cell: tuple[float, float]
     cur: np.ndarray
     prev: np.ndarray
-    motions: dict[int, np.ndarray]
+    ids: np.ndarray
+    thetas: np.ndarray
+    trans: np.ndarray
     evidence: float
 
     def body(self, rest: np.ndarray, lab: int, box: tuple[slice, slice],
@@ -329,7 +331,8 @@ class CarriedBodies:
         pixels that do not look like the static world under a shadow or another light), or
         None. ``changed``: (H, W) bool, pixels that look unlike the static world last seen
         there (:meth:`StaticMemory.changed`)."""
-        if lab not in self.motions:
+        k = np.flatnonzero(self.ids == lab)
+        if not len(k):
             return None
         side = max(1, int(round(BODY_SOLID_CELLS * max(self.cell))))
         body = cv2.morphologyEx(rest.view(np.uint8), cv2.MORPH_OPEN,
@@ -340,7 +343,8 @@ class CarriedBodies:
                 or changed[box][body].mean() <= BODY_NEW_SHARE):
             return None
         still = photometric_residual(self.cur, self.prev, IDENTITY[:2], box)[body].mean()
-        moved = photometric_residual(self.cur, self.prev, self.motions[lab], box)[body].mean()
+        motion = rigid_matrix(self.thetas[k[0]], self.trans[k[0]])
+        moved = photometric_residual(self.cur, self.prev, motion, box)[body].mean()
         return body if still - moved > self.evidence else None
 
 
@@ -396,7 +400,7 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
              if sum(_box_area(boxes[i - 1]) for i in tested) < _box_area(union)
              else [(union, tested)])
     gone = []
-    out = labels
+    out, changed = labels, None
     for box, members in parts:
         # not where the memory holds a MotionBit's own look (its body, seen at rest): the
         # flow may follow a passing shadow's edge across it
@@ -410,7 +414,9 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
         if carried is None or not found:
             gone += found
             continue
-        other, changed = ~(shadow | memory.same_colour(cur, box)), memory.changed()
+        other = ~(shadow | memory.same_colour(cur, box))
+        if changed is None:
+            changed = memory.changed()
         for i in found:
             body = carried.body((lab == i) & other, i, box, changed)
             if body is None:

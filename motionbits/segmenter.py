@@ -61,8 +61,7 @@ from motionbits.second_thread import Task, second_thread
 from motionbits.setdown import SetDown
 from motionbits.shadows import cast_shadows, shadow_map, trim_shadows
 from motionbits.temporal import TemporalState
-from motionbits.twists import (fit_local_motions, nodes_to_fit, refine_moving_motions,
-                               rigid_matrix)
+from motionbits.twists import fit_local_motions, nodes_to_fit, refine_moving_motions
 from motionbits.video import FrameSource, as_rgb_frame, iter_frames
 
 __all__ = ["MotionBit", "MotionBitsResult", "MotionBitsSegmenter", "segment_video", "STAGES"]
@@ -511,9 +510,7 @@ class MotionBitsSegmenter:
             # (a MotionBit found to be a cast shadow keeps the body it carried with it)
             labels = retire_shadows(labels, cur, self._memory, moving, self._spans.first,
                                     self.frame_index, CarriedBodies(
-                                        grid.cell, cur_g, prev_g,
-                                        {int(i): rigid_matrix(th, t)
-                                         for i, th, t in zip(ids, thetas, trans)},
+                                        grid.cell, cur_g, prev_g, ids, thetas, trans,
                                         cfg.pixel_evidence))
             present = (before if labels is observed  # none retired
                        else np.flatnonzero(label_areas(labels)[1:]) + 1)
