@@ -43,7 +43,13 @@ under a cast shadow (``shadow``: :func:`motionbits.shadows.cast_shadows`) and th
 texture first seen there shows through, correlated (:meth:`FirstLook.shows_texture`), and
 the thin rim of mask left around them (the shadow test misses a shadow's hard edges): the
 block's shadow that its mark took along is often half of the mark, and then its colours
-are in the body's model and the cut keeps it (round 50).
+are in the body's model and the cut keeps it (round 50). Where the first look has
+texture, a mark at rest's pixels that show it unchanged
+(:meth:`FirstLook.as_first_seen_here`: the table its motion's smeared flow took along,
+three times the body's area on a woven cloth) start on the background's side of the cut
+and go wherever the cut leaves them there, however much of the mark they are (round
+62); a flat face is never tested (a uniform block nudged less than its size looks as
+first seen where it overlaps itself).
 
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
