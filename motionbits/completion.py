@@ -43,13 +43,7 @@ under a cast shadow (``shadow``: :func:`motionbits.shadows.cast_shadows`) and th
 texture first seen there shows through, correlated (:meth:`FirstLook.shows_texture`), and
 the thin rim of mask left around them (the shadow test misses a shadow's hard edges): the
 block's shadow that its mark took along is often half of the mark, and then its colours
-are in the body's model and the cut keeps it (round 50). Where the first look has
-texture, a mark at rest's pixels that show it unchanged
-(:meth:`FirstLook.as_first_seen_here`: the table its motion's smeared flow took along,
-three times the body's area on a woven cloth) start on the background's side of the cut
-and go wherever the cut leaves them there, however much of the mark they are (round
-62); a flat face is never tested (a uniform block nudged less than its size looks as
-first seen where it overlaps itself).
+are in the body's model and the cut keeps it (round 50).
 
 Within a stream, a mark at rest takes the cut found for it at the last frame again while
 it and the image under it have not changed (:class:`CutMemory`): GrabCut's answer turns
@@ -380,12 +374,6 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
         trimap[_in_box(prior.body, (prior.rows, prior.cols), around)
                & (trimap == cv2.GC_PR_BGD) & free] = cv2.GC_PR_FGD
     trimap[mask] = cv2.GC_PR_FGD
-    # a mark at rest's pixels that show the scene first seen there, unchanged, start on
-    # the background's side (the table its motion's smeared flow took along)
-    seen = None
-    if trim and first_look is not None:
-        seen = first_look.as_first_seen_here(rgb, (rows, cols)) & mask
-        trimap[seen] = cv2.GC_PR_BGD
     body = _grab_cut(rgb[rows, cols], trimap)
     if body is None:
         return None, False
@@ -398,8 +386,6 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
         kept = _without_shadow(_trimmed(mask & ~cast, body), cast & mask)
     else:
         kept = _trimmed(mask, body) if trim else mask
-    if seen is not None and (seen & kept & ~body).any():  # ... and go where the cut says so,
-        kept = kept & ~(seen & ~body)  # however much of the mark they are (round 62)
     # the pieces of the cut that hold mask pixels, where no mask is yet
     new = pieces_holding(body & (free | kept), kept) & free
     if new.any():  # ... less the table under a shadow (the body's cast shadow is its colour),
@@ -717,35 +703,6 @@ class FirstLook:
         or more there. A shadow dims a texture and keeps it (but for the window that
         straddles its hard edge); a body's dark, speckled face over it has a texture of its
         own."""
-        textured, shown = self._texture_shows(rgb, box)
-        textured &= shadow
-        shown &= textured
-        n, pieces = cv2.connectedComponents(shadow.view(np.uint8), connectivity=8)
-        votes = np.bincount(pieces[textured], minlength=n)
-        agree = np.bincount(pieces[shown], minlength=n)
-        taken = (votes > 0) & (agree >= SHOWN_SHARE * votes)
-        taken[0] = False
-        return taken[pieces]
-
-    def as_first_seen_here(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
-        """(h, w) bool: pixels of the image box ``box`` where the (H, W, 3) uint8 frame
-        ``rgb`` shows the scene as first seen, unchanged: known, within ``covered`` of the
-        first look, which has texture there that the frame's grey levels follow
-        (:meth:`shows_texture`'s test, pixel by pixel). The table a mark at rest took along
-        from its motion's smeared flow (round 62); a flat face is never tested (a uniform
-        block nudged less than its size looks as first seen)."""
-        same = self.known[box] & ~self._differs(rgb, box)
-        if not same.any():
-            return same
-        textured, shown = self._texture_shows(rgb, box)
-        return same & textured & shown
-
-    def _texture_shows(self, rgb: np.ndarray, box: tuple[slice, slice]
-                       ) -> tuple[np.ndarray, np.ndarray]:
-        """(h, w) bool each, on the image box ``box``: where the first look has texture
-        (grey levels' standard deviation over ``SHADOW_TEXTURE`` within ``TEXTURE_WINDOW``
-        px), and where the (H, W, 3) uint8 frame ``rgb``'s grey levels correlate with it by
-        ``SHOWN_CORRELATION`` or more there, dimmed or not."""
         now = cv2.cvtColor(rgb[box], cv2.COLOR_RGB2GRAY).astype(np.float32)
         then = cv2.cvtColor(self.look[box], cv2.COLOR_RGB2GRAY).astype(np.float32)
         window = (TEXTURE_WINDOW, TEXTURE_WINDOW)
@@ -753,9 +710,15 @@ class FirstLook:
         var_now = cv2.blur(now * now, window) - mean_now * mean_now
         var_then = cv2.blur(then * then, window) - mean_then * mean_then
         covariance = cv2.blur(now * then, window) - mean_now * mean_then
-        textured = var_then > SHADOW_TEXTURE ** 2
-        shown = covariance > SHOWN_CORRELATION * np.sqrt(np.maximum(var_now * var_then, 1e-6))
-        return textured, shown
+        textured = shadow & (var_then > SHADOW_TEXTURE ** 2)
+        shown = textured & (covariance > SHOWN_CORRELATION
+                            * np.sqrt(np.maximum(var_now * var_then, 1e-6)))
+        n, pieces = cv2.connectedComponents(shadow.view(np.uint8), connectivity=8)
+        votes = np.bincount(pieces[textured], minlength=n)
+        agree = np.bincount(pieces[shown], minlength=n)
+        taken = (votes > 0) & (agree >= SHOWN_SHARE * votes)
+        taken[0] = False
+        return taken[pieces]
 
     def texture_kept(self, rgb: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
         """(h, w) bool: where the first look's texture shows through the (H, W, 3) uint8

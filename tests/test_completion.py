@@ -524,30 +524,6 @@ def test_a_cut_that_would_take_most_of_a_mark_away_leaves_it_as_it_is():
     assert (out[mostly_table == 3] == 3).all()
 
 
-def test_a_mark_at_rest_gives_back_the_table_as_first_seen_however_much_of_it():
-    """A block's mark at rest whose motion's smeared flow took three times the block's
-    area of table along: with the table as first seen there (its texture, unchanged), the
-    cut's background gets it back, past the share a trim may otherwise take; without
-    the first look, the mark stays as it was. A uniform block nudged less than its size
-    keeps the part that stands where it stood: a flat face is not tested."""
-    rgb, body, _ = _scene()
-    halo = np.zeros_like(body)
-    halo[50:170, 90:210] = True  # 120 x 120 px: the block's 60 x 60 and the table around
-    labels = np.where(halo, 3, 0).astype(np.int32)
-    halo &= ~body
-    first = _first_look(_table(), (slice(0, 0), slice(0, 0)))  # the table, seen everywhere
-    out = complete_masks(labels, rgb, first_look=first)
-    assert (out[body] == 3).mean() > 0.95
-    assert (out[halo] == 0).mean() > 0.95
-    plain = complete_masks(labels, rgb)
-    assert (plain[halo] == 3).all()
-    before = _table()
-    before[80:140, 116:176] = (200, 40, 40)  # the block first seen 4 px to the left
-    nudged = complete_masks(np.where(body, 3, 0).astype(np.int32), rgb,
-                            first_look=_first_look(before, (slice(0, 0), slice(0, 0))))
-    assert (nudged[body] == 3).all()
-
-
 def _block_and_its_shadow(width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A purple block (rows 80:140, cols 120:160) on the table and its cast shadow beside
     it (``width`` px to its right: the table at half the light); (rgb, block, shadow)."""
