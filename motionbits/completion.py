@@ -2,14 +2,16 @@
 
 Motion marks only the parts of a body where the flow read it: a cylinder's evenly lit top
 that slid, the far half of a door, a block's wooden top whose grain the flow smeared. The
-mask found there is precise but partial. Each shown mask of a MotionBit at rest now, seen
-whole (it reaches no image border: not an arm or hand that enters the frame), is grown by
-OpenCV's GrabCut (colour models of the mask and of its surroundings, cut along the image's
-edges) within a box around it: the pixels the cut gives to the body, joined to the mask
-and not another mask's, are the body's too -- unless they run out to the box's frame
-(a mark spilled onto a plain table would take the table as far as the box goes; the cut
-is then tried once more in a box twice as far out, for a mark on a small part of its
-body, such as a block's top face whose sides run past the first box). The
+mask found there is precise but partial. Each shown mask of a MotionBit at rest now that
+reaches no image border, or a small one that does (``BORDER_MARK_SHARE``: a body the view
+cuts, not an arm or hand that enters the frame; round 62), is grown by OpenCV's GrabCut
+(colour models of the mask and of its surroundings, cut along the image's edges) within
+a box around it: the pixels the cut gives to the body, joined to the mask and not another
+mask's, are the body's too -- unless they run out to the box's frame where it is not the
+image's border, or add more than ``BORDER_GROWTH`` times the mask where they reach the
+image's border (a mark spilled onto a plain table would take the table as far as the box
+goes; the cut is then tried once more in a box twice as far out, for a mark on a small
+part of its body, such as a block's top face whose sides run past the first box). The
 marks too small to show are completed last (:func:`complete_small_marks`), where no
 other mark is, and shown only if their body then covers the smallest shown size; one that
 touches another mark is the rest of that mark's body and joins it. The segmenter's state
@@ -80,8 +82,16 @@ __all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook",
            "COMPLETION_REACH", "WIDER", "COMPLETION_SIDE", "OPEN_OUTLINE_SHARE",
            "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED", "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST",
            "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN", "SHADOW_RIM", "SHOWN_CORRELATION",
-           "SHOWN_SHARE", "TEXTURE_WINDOW", "SHADOW_TEXTURE", "TOUCH_SHARE"]
+           "SHOWN_SHARE", "TEXTURE_WINDOW", "SHADOW_TEXTURE", "TOUCH_SHARE",
+           "BORDER_MARK_SHARE", "BORDER_GROWTH"]
 
+#: A mark at rest that reaches the image's border is completed when it covers at most
+#: this share of the image (a body the view cuts; an arm or hand entering the view is
+#: larger: without the bound, sim40's hand track lost 4.5 mIoU, round 62) ...
+BORDER_MARK_SHARE = 0.01
+#: ... and a cut that reaches the image's border adds at most this many times the mark
+#: (a mark beside the border took the table along it, 126,000 px, without it).
+BORDER_GROWTH = 3
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
 #: background's for sure. 0.75 since the cut starts from the first look (round 25: a
@@ -192,8 +202,9 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
                    first_look: FirstLook | None = None,
                    labels: Collection[int] | None = None,
                    shadow: np.ndarray | None = None) -> np.ndarray:
-    """Grow each mask that reaches no image border over the rest of its body (GrabCut):
-    every mask at rest, a moving one where its outline stops inside its body.
+    """Grow each mask over the rest of its body (GrabCut): every mask at rest that reaches
+    no image border or covers at most ``BORDER_MARK_SHARE`` of the image, a moving one
+    that reaches no image border where its outline stops inside its body.
 
     Args:
         label_map: (H, W) int32 labels (0 = background).
@@ -229,7 +240,12 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
     found: dict[int, _Cut] = {}  # the cuts of the marks at rest, for the memory
     for i, box in enumerate(label_boxes(label_map)):
         label = i + 1
-        if box is None or border[label] or (labels is not None and label not in labels):
+        if box is None or (labels is not None and label not in labels):
+            continue
+        # at the image's border: a small mark at rest only (a body the view cuts, not an
+        # arm or hand that enters it)
+        if border[label] and (label in moving or np.count_nonzero(label_map[box] == label)
+                              > BORDER_MARK_SHARE * label_map.size):
             continue
         if label in moving and (gradient is None or not _open_outline(label_map, label, box,
                                                                       gradient)):
@@ -364,7 +380,11 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     free = out[rows, cols] == 0  # where no mask is yet
     trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
     f = COMPLETION_FRAME
-    trimap[f:-f, f:-f] = cv2.GC_PR_BGD
+    # the box's frame is the background's for sure, but where it is the image's border
+    edge = (rows.start == 0, rows.stop == label_map.shape[0], cols.start == 0,
+            cols.stop == label_map.shape[1])  # top, bottom, left, right
+    trimap[0 if edge[0] else f:mask.shape[0] if edge[1] else -f,
+           0 if edge[2] else f:mask.shape[1] if edge[3] else -f] = cv2.GC_PR_BGD
     relit = None  # the scene first seen there, under a cast shadow now
     if first_look is not None:  # (another mark's pixels are not this body's)
         relit = first_look.relit(rgb, (rows, cols), first_look.known[rows, cols])
@@ -400,8 +420,11 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
         return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept), False
     # a cut that runs out to its box's frame found no body's rest (a plain table) --
     # or the box was too small for it
-    if _reaches_frame(new):
+    if _reaches_frame(new, edge):
         return None, True
+    # one that reaches the image's border is a body the view cuts, not the table along it
+    if _reaches_frame(new) and np.count_nonzero(new) > BORDER_GROWTH * np.count_nonzero(mask):
+        return None, False
     return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept | new), False
 
 
@@ -750,12 +773,15 @@ def _inside(box: tuple[slice, slice], outer: tuple[slice, slice]) -> bool:
             and box[1].start >= outer[1].start and box[1].stop <= outer[1].stop)
 
 
-def _reaches_frame(new: np.ndarray) -> bool:
+def _reaches_frame(new: np.ndarray,
+                   edge: tuple[bool, bool, bool, bool] = (False, False, False, False)) -> bool:
     """Whether the (h, w) bool pixels ``new`` come within one px of the box's frame (its
-    outermost ``COMPLETION_FRAME`` px, the background's for sure)."""
+    outermost ``COMPLETION_FRAME`` px, the background's for sure), but on the sides that
+    are the image's border (``edge``: top, bottom, left, right)."""
     reach = COMPLETION_FRAME + 1
-    return bool(new[:reach].any() or new[-reach:].any() or new[:, :reach].any()
-                or new[:, -reach:].any())
+    return bool((not edge[0] and new[:reach].any()) or (not edge[1] and new[-reach:].any())
+                or (not edge[2] and new[:, :reach].any())
+                or (not edge[3] and new[:, -reach:].any()))
 
 
 def _open_outline(label_map: np.ndarray, label: int, box: tuple[slice, slice],

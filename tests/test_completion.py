@@ -116,6 +116,62 @@ def test_no_completion_for_a_mask_at_the_border_nor_over_another_mask():
     assert (out[102:116, 122:178] == 3).all()
 
 
+def test_a_small_mark_at_rest_at_the_border_takes_the_rest_of_the_body_the_view_cuts():
+    """A red block cut by the image's bottom border, its mark at rest on the upper half:
+    the cut takes the rest of it, down to the border (the box's frame is the background's
+    only where it is not the image's border). Not a moving mark there, nor one larger
+    than ``BORDER_MARK_SHARE`` of the image (an arm or hand entering the view)."""
+    rgb = _table()
+    body = np.zeros((240, 320), bool)
+    body[220:240, 140:170] = True  # 600 px, cut by the bottom border
+    rgb[body] = (200, 40, 40)
+    labels = np.zeros((240, 320), np.int32)
+    labels[220:230, 140:170] = 3
+    labels[239, 150:160] = 3  # the mark reaches the border
+    assert (labels == 3).sum() <= completion.BORDER_MARK_SHARE * labels.size
+    out = complete_masks(labels, rgb)
+    assert (out[body] == 3).all()
+    assert (out[~body] == 0).all()
+    grad = gradient_magnitude(cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32))
+    assert complete_masks(labels, rgb, moving={3}, gradient=grad) is labels
+    big = rgb.copy()
+    big[160:240, 120:200] = (200, 40, 40)  # 6400 px
+    large = np.zeros_like(labels)
+    large[160:200, 120:200] = 3
+    large[239, 150:160] = 3
+    assert complete_masks(large, big) is large
+
+
+def test_a_cut_along_the_image_s_border_takes_no_more_than_its_share(monkeypatch):
+    """A cut that reaches the image's border may add at most ``BORDER_GROWTH`` times the
+    mark: a mark beside the border whose cut takes the table along it takes nothing."""
+    rgb, body, labels = _scene()
+    labels = np.zeros_like(labels)
+    labels[200:220, 140:160] = 3  # 400 px, 20 px above the bottom border
+    strip = np.zeros((240, 320), bool)
+    strip[200:240, 40:280] = True  # the mark and the table along the border
+
+    box = {}
+
+    def cut_takes_the_strip(image, trimap):
+        return strip[box["around"]].copy()
+
+    real = completion._cut_within
+
+    def within(label_map, label, around, *args):
+        box["around"] = around
+        return real(label_map, label, around, *args)
+
+    monkeypatch.setattr(completion, "_grab_cut", cut_takes_the_strip)
+    monkeypatch.setattr(completion, "_cut_within", within)
+    out = complete_masks(labels, rgb)
+    assert (out == labels).all()
+    strip[:] = False
+    strip[200:240, 140:160] = True  # the mark and 20 px below it, to the border
+    out = complete_masks(labels, rgb)
+    assert (out[200:240, 140:160] == 3).mean() > 0.99  # (less a darker speck of table)
+
+
 def test_the_same_frame_gives_the_same_marks_whatever_ran_before():
     """GrabCut draws its first colour models at random (OpenCV's global generator): the
     marks must not depend on the state others left it in."""
