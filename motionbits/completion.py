@@ -92,6 +92,7 @@ BORDER_MARK_SHARE = 0.01
 #: ... and a cut that reaches the image's border adds at most this many times the mark
 #: (a mark beside the border took the table along it, 126,000 px, without it).
 BORDER_GROWTH = 3
+
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
 #: background's for sure. 0.75 since the cut starts from the first look (round 25: a
