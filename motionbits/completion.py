@@ -8,8 +8,8 @@ cuts, not an arm or hand that enters the frame; round 62), is grown by OpenCV's 
 (colour models of the mask and of its surroundings, cut along the image's edges) within
 a box around it: the pixels the cut gives to the body, joined to the mask and not another
 mask's, are the body's too -- unless they run out to the box's frame where it is not the
-image's border, or add more than ``BORDER_GROWTH`` times the mask where they reach the
-image's border (a mark spilled onto a plain table would take the table as far as the box
+image's border that the mask reaches, or add more than ``BORDER_GROWTH`` times the mask
+where they reach it (a mark spilled onto a plain table would take the table as far as the box
 goes; the cut is then tried once more in a box twice as far out, for a mark on a small
 part of its body, such as a block's top face whose sides run past the first box). The
 marks too small to show are completed last (:func:`complete_small_marks`), where no
@@ -381,9 +381,12 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     free = out[rows, cols] == 0  # where no mask is yet
     trimap = np.full(mask.shape, cv2.GC_BGD, np.uint8)
     f = COMPLETION_FRAME
-    # the box's frame is the background's for sure, but where it is the image's border
-    edge = (rows.start == 0, rows.stop == label_map.shape[0], cols.start == 0,
-            cols.stop == label_map.shape[1])  # top, bottom, left, right
+    # the box's frame is the background's for sure, but where it is the image's border and
+    # the mark reaches it (a body the view cuts; a mark inside the view that a cut takes to
+    # the border took the scenery around it: 02_cups.mp4's foliage, round 62)
+    edge = (rows.start == 0 and mask[0].any(), rows.stop == label_map.shape[0]
+            and mask[-1].any(), cols.start == 0 and mask[:, 0].any(),
+            cols.stop == label_map.shape[1] and mask[:, -1].any())  # top, bottom, left, right
     trimap[0 if edge[0] else f:mask.shape[0] if edge[1] else -f,
            0 if edge[2] else f:mask.shape[1] if edge[3] else -f] = cv2.GC_PR_BGD
     relit = None  # the scene first seen there, under a cast shadow now
@@ -777,8 +780,8 @@ def _inside(box: tuple[slice, slice], outer: tuple[slice, slice]) -> bool:
 def _reaches_frame(new: np.ndarray,
                    edge: tuple[bool, bool, bool, bool] = (False, False, False, False)) -> bool:
     """Whether the (h, w) bool pixels ``new`` come within one px of the box's frame (its
-    outermost ``COMPLETION_FRAME`` px, the background's for sure), but on the sides that
-    are the image's border (``edge``: top, bottom, left, right)."""
+    outermost ``COMPLETION_FRAME`` px, the background's for sure), but on the sides
+    ``edge`` (top, bottom, left, right: the image's border, where the mark reaches it)."""
     reach = COMPLETION_FRAME + 1
     return bool((not edge[0] and new[:reach].any()) or (not edge[1] and new[-reach:].any())
                 or (not edge[2] and new[:, :reach].any())

@@ -143,11 +143,14 @@ def test_a_small_mark_at_rest_at_the_border_takes_the_rest_of_the_body_the_view_
 
 
 def test_a_cut_along_the_image_s_border_takes_no_more_than_its_share(monkeypatch):
-    """A cut that reaches the image's border may add at most ``BORDER_GROWTH`` times the
-    mark: a mark beside the border whose cut takes the table along it takes nothing."""
+    """A cut that reaches the image's border where the mark does may add at most
+    ``BORDER_GROWTH`` times the mark: one that takes the table along the border takes
+    nothing, one that takes the 20 px below the mark is taken. A mark inside the view
+    whose cut reaches the border ran out of its box (the scenery around it)."""
     rgb, body, labels = _scene()
     labels = np.zeros_like(labels)
-    labels[200:220, 140:160] = 3  # 400 px, 20 px above the bottom border
+    labels[200:220, 140:160] = 3  # 400 px, 20 px above the bottom border ...
+    labels[239, 145:155] = 3  # ... and a sliver on it
     strip = np.zeros((240, 320), bool)
     strip[200:240, 40:280] = True  # the mark and the table along the border
 
@@ -170,6 +173,8 @@ def test_a_cut_along_the_image_s_border_takes_no_more_than_its_share(monkeypatch
     strip[200:240, 140:160] = True  # the mark and 20 px below it, to the border
     out = complete_masks(labels, rgb)
     assert (out[200:240, 140:160] == 3).mean() > 0.99  # (less a darker speck of table)
+    inside = np.where(np.arange(240)[:, None] < 239, labels, 0).astype(np.int32)
+    assert (complete_masks(inside, rgb) == inside).all()
 
 
 def test_the_same_frame_gives_the_same_marks_whatever_ran_before():
