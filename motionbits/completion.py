@@ -9,10 +9,10 @@ cuts, not an arm or hand that enters the frame; round 62), is grown by OpenCV's 
 a box around it: the pixels the cut gives to the body, joined to the mask and not another
 mask's, are the body's too -- unless they run out to the box's frame where it is not the
 image's border that the mask reaches, or add more than ``BORDER_GROWTH`` times the mask
-where they reach it (a mark spilled onto a plain table would take the table as far as the box
-goes; the cut is then tried once more in a box twice as far out, for a mark on a small
-part of its body, such as a block's top face whose sides run past the first box). The
-marks too small to show are completed last (:func:`complete_small_marks`), where no
+where they reach it (a mark spilled onto a plain table would take the table as far as the
+box goes; the cut is then tried once more in a box twice as far out, for a mark on a
+small part of its body, such as a block's top face whose sides run past the first box).
+The marks too small to show are completed last (:func:`complete_small_marks`), where no
 other mark is, and shown only if their body then covers the smallest shown size; one that
 touches another mark is the rest of that mark's body and joins it. The segmenter's state
 keeps the motion's masks.

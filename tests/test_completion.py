@@ -119,7 +119,8 @@ def test_no_completion_for_a_mask_at_the_border_nor_over_another_mask():
 def test_a_small_mark_at_rest_at_the_border_takes_the_rest_of_the_body_the_view_cuts():
     """A red block cut by the image's bottom border, its mark at rest on the upper half:
     the cut takes the rest of it, down to the border (the box's frame is the background's
-    only where it is not the image's border). Not a moving mark there, nor one larger
+    but where it is the image's border that the mark reaches). Not a moving mark there,
+    nor one larger
     than ``BORDER_MARK_SHARE`` of the image (an arm or hand entering the view)."""
     rgb = _table()
     body = np.zeros((240, 320), bool)
