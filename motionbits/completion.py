@@ -237,16 +237,16 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             memory.keep({})
         return label_map
     border = at_border(label_map)
+    # a mark at the image's border is completed only at rest and small (an arm or hand
+    # entering the view is not a body the view cuts)
+    small = label_areas(label_map) <= BORDER_MARK_SHARE * label_map.size
     out = label_map
     found: dict[int, _Cut] = {}  # the cuts of the marks at rest, for the memory
     for i, box in enumerate(label_boxes(label_map)):
         label = i + 1
         if box is None or (labels is not None and label not in labels):
             continue
-        # at the image's border: a small mark at rest only (a body the view cuts, not an
-        # arm or hand that enters it)
-        if border[label] and (label in moving or np.count_nonzero(label_map[box] == label)
-                              > BORDER_MARK_SHARE * label_map.size):
+        if border[label] and (label in moving or not small[label]):
             continue
         if label in moving and (gradient is None or not _open_outline(label_map, label, box,
                                                                       gradient)):

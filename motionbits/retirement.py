@@ -21,6 +21,7 @@ import numpy as np
 from motionbits.boxes import grow_box, label_areas, label_boxes, nonzero_box, run_counts
 from motionbits.evidence import photometric_residual
 from motionbits.masks import drop_labels
+from motionbits.merging import STILL
 from motionbits.revealed import StaticMemory
 from motionbits.twists import rigid_matrix
 
@@ -342,7 +343,7 @@ class CarriedBodies:
                 or n < BODY_SHARE * np.count_nonzero(rest)
                 or changed[box][body].mean() <= BODY_NEW_SHARE):
             return None
-        still = photometric_residual(self.cur, self.prev, IDENTITY[:2], box)[body].mean()
+        still = photometric_residual(self.cur, self.prev, STILL, box)[body].mean()
         motion = rigid_matrix(self.thetas[k[0]], self.trans[k[0]])
         moved = photometric_residual(self.cur, self.prev, motion, box)[body].mean()
         return body if still - moved > self.evidence else None
@@ -418,13 +419,14 @@ def retire_shadows(labels: np.ndarray, cur: np.ndarray, memory: StaticMemory,
         if changed is None:
             changed = memory.changed()
         for i in found:
-            body = carried.body((lab == i) & other, i, box, changed)
+            mine = lab == i
+            body = carried.body(mine & other, i, box, changed)
             if body is None:
                 gone.append(i)
                 continue
             if out is labels:
                 out = labels.copy()
-            out[box][(lab == i) & ~body] = 0
+            out[box][mine & ~body] = 0
     return drop_labels(out, gone)
 
 
