@@ -29,7 +29,8 @@ from motionbits.flow import pixel_grid
 
 __all__ = ["epipolar_distance", "fit_epipole", "parallax_field", "along_epipolar_lines",
            "ParallaxOnly", "ALONG_MIN_PX", "ALONG_MIN_NODES", "ALONG_SINE", "ALONG_PX",
-           "OWN_PX", "PARALLAX_FRAMES", "OFF_LINES_EVERY", "ALONG", "OFF", "OWN"]
+           "OWN_PX", "JUMP", "PARALLAX_FRAMES", "OFF_LINES_EVERY", "ALONG", "OFF",
+           "OWN"]
 
 #: RANSAC hypotheses (node pairs) tried for the epipole; fixed seed, so runs repeat.
 EPIPOLE_ITERS = 200
@@ -56,6 +57,13 @@ ALONG_PX = 0.3
 #: its lines through parallax afterwards); it is never parallax only. Round 39: bodies
 #: knocked left their lines by 4-7 px at that frame.
 OWN_PX = 2.0
+#: A frame at which a MotionBit moved more than this many times as fast as its median over
+#: its measured frames (each over ``ALONG_MIN_PX``: so by more than 4 px) is a motion of
+#: its own too: a static body's parallax follows the camera's smooth motion; a block
+#: knocked nearly along its epipolar lines leaves them by less than ``OWN_PX``, but jumps
+#: (round 63: 10.1 px at its knock, 0.97 px off its lines, then 1.0-1.4 px of parallax at
+#: its six frames at rest; held32 seed-593 scene_0002).
+JUMP = 4.0
 #: What :func:`along_epipolar_lines` says of a MotionBit at a frame.
 ALONG, OFF, OWN = "along", "off", "own"
 #: ... and it is a static body read through parallax once it moved so at this many such
@@ -242,15 +250,19 @@ class ParallaxOnly:
 
     def __init__(self) -> None:
         self._frames: dict[int, tuple[int, int]] = {}  # id -> (measured, along the lines)
+        self._speeds: dict[int, list[float]] = {}  # id -> its median px moved, measured frames
         self._own: set[int] = set()  # ids seen moving by themselves (``OWN``) at some frame
 
     def observe(self, points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
                 moving: Iterable[int], e: np.ndarray) -> None:
         """Count this frame for the MotionBits ``moving`` (arguments as
         :func:`along_epipolar_lines`)."""
+        size = np.linalg.norm(residual, axis=1)
         for i, how in along_epipolar_lines(points, residual, node_ids, moving, e).items():
             measured, lined = self._frames.get(i, (0, 0))
             self._frames[i] = (measured + 1, lined + (how == ALONG))
+            speed = float(np.median(size[(node_ids == i) & (size > ALONG_MIN_PX)]))
+            self._speeds.setdefault(i, []).append(speed)
             if how == OWN:
                 self._own.add(i)
 
@@ -268,6 +280,12 @@ class ParallaxOnly:
         for i in present:
             measured, lined = self._frames.get(int(i), (0, 0))
             if (lined >= PARALLAX_FRAMES and measured - lined <= lined // OFF_LINES_EVERY
-                    and int(i) not in self._own):
+                    and int(i) not in self._own and not self._jumped(int(i))):
                 out.add(int(i))
         return out
+
+    def _jumped(self, i: int) -> bool:
+        """Whether MotionBit ``i`` moved at some measured frame more than ``JUMP`` times as
+        fast as its median over them."""
+        speeds = self._speeds.get(i)
+        return bool(speeds) and max(speeds) > JUMP * float(np.median(speeds))

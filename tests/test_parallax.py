@@ -5,7 +5,8 @@ from conftest import best_iou
 
 from motionbits.camera import compensate_camera
 from motionbits.nodes import NodeGrid
-from motionbits.parallax import (ALONG, ALONG_MIN_PX, ALONG_PX, OFF, OFF_LINES_EVERY, OWN, OWN_PX,
+from motionbits.parallax import (ALONG, ALONG_MIN_PX, ALONG_PX, JUMP, OFF, OFF_LINES_EVERY, OWN,
+                                 OWN_PX,
                                  PARALLAX_FRAMES, ParallaxOnly,
                                  along_epipolar_lines, epipolar_distance, fit_epipole,
                                  parallax_field)
@@ -347,3 +348,32 @@ def test_a_body_found_where_it_came_to_rest_is_never_parallax_only():
         assert set(along_epipolar_lines(p, tall, node_ids, [1, 2], e).values()) == {ALONG}
         parallax.observe(p, tall, node_ids, {1, 2}, e)
     assert parallax.ids([1, 2]) == {1}
+
+
+def test_a_body_knocked_nearly_along_its_lines_jumped_and_is_never_parallax_only():
+    """A block knocked 10 px at one frame, 5 degrees off its epipolar lines (off by less
+    than OWN_PX: the frame reads OFF, not OWN), then standing in the camera's parallax
+    (1.2 px a frame along its lines) jumped: never parallax only. A tall static body whose
+    parallax grows with the camera's speed (1 -> 2.5 px) and one whose flow reads it 3
+    times as fast at one frame (1.1 -> 3.3 px) still are."""
+    rng = np.random.default_rng(7)
+    p = rng.uniform([0, 0], [W, H], (60, 2))
+    e = np.array([*E, 1.0])
+    node_ids = np.repeat([1, 2, 3], 20)
+    line = (p - E) / np.linalg.norm(p - E, axis=1, keepdims=True)
+    normal = np.stack([-line[:, 1], line[:, 0]], 1)
+    knock = 10.0 * (np.cos(np.radians(5)) * line + np.sin(np.radians(5)) * normal)
+    assert 10.0 * np.sin(np.radians(5)) < OWN_PX and 10.0 > JUMP * 1.2
+    assert 3.3 < JUMP * 1.1 and 2.5 < JUMP * 1.0
+    parallax = ParallaxOnly()
+    frames = PARALLAX_FRAMES + 4
+    for frame in range(frames):
+        residual = np.empty((60, 2))
+        residual[:20] = (1.0 + 1.5 * frame / (frames - 1)) * line[:20]  # body 1: 1 -> 2.5 px
+        residual[20:40] = (knock if frame == 0 else 1.2 * line)[20:40]  # body 2: knocked
+        residual[40:] = (3.3 if frame == 1 else 1.1) * line[40:]  # body 3: 3x once
+        residual += rng.normal(0, 0.01, residual.shape)
+        how = along_epipolar_lines(p, residual, node_ids, [1, 2, 3], e)
+        assert how[2] == (OFF if frame == 0 else ALONG) and how[1] == ALONG
+        parallax.observe(p, residual, node_ids, {1, 2, 3}, e)
+    assert parallax.ids([1, 2, 3]) == {1, 3}
