@@ -249,8 +249,9 @@ class ParallaxOnly:
     """
 
     def __init__(self) -> None:
-        self._frames: dict[int, tuple[int, int]] = {}  # id -> (measured, along the lines)
-        self._speeds: dict[int, list[float]] = {}  # id -> its median px moved, measured frames
+        # id -> its median px moved at each measured frame, and how many were along the lines
+        self._speeds: dict[int, list[float]] = {}
+        self._lined: dict[int, int] = {}
         self._own: set[int] = set()  # ids seen moving by themselves (``OWN``) at some frame
 
     def observe(self, points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
@@ -259,10 +260,9 @@ class ParallaxOnly:
         :func:`along_epipolar_lines`)."""
         size = np.linalg.norm(residual, axis=1)
         for i, how in along_epipolar_lines(points, residual, node_ids, moving, e).items():
-            measured, lined = self._frames.get(i, (0, 0))
-            self._frames[i] = (measured + 1, lined + (how == ALONG))
-            speed = float(np.median(size[(node_ids == i) & (size > ALONG_MIN_PX)]))
-            self._speeds.setdefault(i, []).append(speed)
+            self._speeds.setdefault(i, []).append(
+                float(np.median(size[(node_ids == i) & (size > ALONG_MIN_PX)])))
+            self._lined[i] = self._lined.get(i, 0) + (how == ALONG)
             if how == OWN:
                 self._own.add(i)
 
@@ -275,17 +275,13 @@ class ParallaxOnly:
     def ids(self, present: Iterable[int]) -> set[int]:
         """Of the ids ``present``, those that moved along the epipolar lines at
         ``PARALLAX_FRAMES`` measured frames or more, otherwise at no more than one in
-        ``OFF_LINES_EVERY`` of those, and never by themselves (``OWN``)."""
+        ``OFF_LINES_EVERY`` of those, never by themselves (``OWN``), and never more than
+        ``JUMP`` times as fast as at their median measured frame."""
         out = set()
         for i in present:
-            measured, lined = self._frames.get(int(i), (0, 0))
-            if (lined >= PARALLAX_FRAMES and measured - lined <= lined // OFF_LINES_EVERY
-                    and int(i) not in self._own and not self._jumped(int(i))):
+            speeds, lined = self._speeds.get(int(i), []), self._lined.get(int(i), 0)
+            if (lined >= PARALLAX_FRAMES and len(speeds) - lined <= lined // OFF_LINES_EVERY
+                    and int(i) not in self._own
+                    and max(speeds) <= JUMP * float(np.median(speeds))):  # no jump
                 out.add(int(i))
         return out
-
-    def _jumped(self, i: int) -> bool:
-        """Whether MotionBit ``i`` moved at some measured frame more than ``JUMP`` times as
-        fast as its median over them."""
-        speeds = self._speeds.get(i)
-        return bool(speeds) and max(speeds) > JUMP * float(np.median(speeds))
