@@ -9,7 +9,6 @@ its mask -- and specks are removed.
 
 from __future__ import annotations
 
-from collections.abc import Collection
 from typing import NamedTuple
 
 import cv2
@@ -182,8 +181,7 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
                   prev_gray: np.ndarray, static: StaticCost, prior: np.ndarray,
                   prior_valid: np.ndarray, earned: np.ndarray, *,
                   bonus: float, photo_weight: float, evidence: float, kept: np.ndarray,
-                  ambiguous: float, resting: Collection[int] = ()
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  ambiguous: float) -> tuple[np.ndarray, np.ndarray]:
     """Label every pixel by the motion that best explains it.
 
     The cost of a motion at a pixel is its flow residual (px), weighted by how much texture
@@ -218,12 +216,6 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         ambiguous: px; where a cluster's motion moves a pixel less than this, the motion
             cannot be told from the background (e.g. near a centre of rotation) and the
             node-level cluster label gets the same credit as the prior.
-        resting: ids whose cluster does not move now: each takes only its own valid
-            prior pixels and those its motion explains better than "static" by
-            ``evidence`` -- at rest, its motion is the static world's, and the tie on the
-            table around it (its nodes' cells hold both) went its way a few pixels each
-            frame (round 63: a cylinder at rest grew from 2,924 to 5,460 px over five
-            frames, its body 1,191).
 
     Returns:
         (H, W) int32 label map and the (H, W) bool ``earned`` map of this frame.
@@ -267,11 +259,9 @@ def assign_pixels(grid: NodeGrid, node_labels: np.ndarray, labels: np.ndarray, t
         own = (mine & prior_valid[box]) | (barely & (node_map[box] == lab))
         cost = texture[box] * resid + photo_weight * photo - bonus * own
         better = inside & (cost < best[box])
-        gain = static_photo[box] - photo
-        if lab in resting:  # at rest, it takes no pixel its motion does not explain
-            better &= (mine & prior_valid[box]) | (gain > evidence)
         best[box][better] = cost[better]
         out[box][better] = lab
+        gain = static_photo[box] - photo
         shown[box][better] = ((gain > evidence) | (earned[box] & mine))[better]
     out = fill_holes(out)
     return out, shown & (out > 0)

@@ -450,8 +450,7 @@ class MotionBitsSegmenter:
             labels, earned = assign_pixels(
                 grid, node_ids, ids, thetas, trans, flow_m, cur_g, prev_g, static, prior,
                 prior_valid, earned, bonus=cfg.prior_bonus, photo_weight=cfg.photo_weight,
-                evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold,
-                resting=set(ids.tolist()) - moving)
+                evidence=cfg.pixel_evidence, kept=kept, ambiguous=cfg.move_threshold)
             # a point seen standing still while a MotionBit moved does not join it now
             # (with a still camera: under a moving one, standing still is judged against
             # the static world's model, and parallax or a moving shadow's edge on a kerb

@@ -8,7 +8,7 @@ import pytest
 import motionbits.segmenter as segmenter_module
 from motionbits import MotionBitsConfig, segment_video
 from motionbits.evidence import appearance_consistent, gradient_magnitude, pull_back
-from motionbits.masks import assign_pixels, hide_small, hide_thin, static_cost
+from motionbits.masks import hide_small, hide_thin
 from motionbits.merging import (OUTWEIGH, MotionBitGroups, apply_joins, drop_seen_still,
                                 join_convex, mostly_moving, observe_touching, seen_still,
                                 standing_still, touching_pairs)
@@ -592,37 +592,6 @@ def test_a_stopped_body_keeps_its_id_after_another_passes_in_front():
     assert max((r.labels[body] != block_id).mean() for r in results[8:18]) > 0.9
     assert not (clip.labels[-1][body] == 2).any()  # the bar has gone on
     assert (results[-1].labels[body] == block_id).mean() > 0.8
-
-
-@pytest.mark.parametrize("at_rest", [True, False])
-def test_a_motionbit_at_rest_takes_no_table_its_motion_does_not_explain(at_rest):
-    """A block at rest whose cluster's nodes also cover the textured table around it (at
-    rest, the table's motion and the block's are one): "static" misses the frame by a
-    grey level there (noise), the block's zero motion by none. Its MotionBit keeps its own
-    pixels and takes none of the table; the same cluster, were it moving, could."""
-    grid = NodeGrid.build(60, 80, 10, 4)  # 8 x 6 px cells
-    rng = np.random.default_rng(8)
-    frame = rng.uniform(0, 255, (60, 80)).astype(np.float32)  # textured, unchanged
-    prior = np.zeros((60, 80), np.int32)
-    prior[18:36, 24:48] = 1  # the block's carried pixels, valid and earned
-    valid, earned = np.ones((60, 80), bool), prior > 0
-    nodes = np.zeros((10, 10), np.int64)
-    nodes[2:7, 2:7] = 1  # its cluster: y 12-42, x 16-56, the table around it too
-    still = np.ones((60, 80), np.float32)
-    gradient = gradient_magnitude(frame)
-    static = static_cost(np.zeros((60, 80), np.float32), gradient, still, prior, valid,
-                         earned, flow_texture=4.0, bonus=0.35, photo_weight=0.1)
-    labels, _ = assign_pixels(
-        grid, nodes.ravel(), np.array([1]), np.zeros(1), np.zeros((1, 2)),
-        np.zeros((60, 80, 2), np.float32), frame, frame, static, prior, valid, earned,
-        bonus=0.35, photo_weight=0.1, evidence=3.0, kept=np.zeros(0, np.int64),
-        ambiguous=1.0, resting={1} if at_rest else set())
-    assert (labels[prior > 0] == 1).all()
-    table = (labels == 1) & (prior == 0)
-    if at_rest:
-        assert not table.any()
-    else:  # the tie went its way on the table its nodes cover (what it grew by each frame)
-        assert table.sum() > 0.5 * (30 * 40 - prior.astype(bool).sum())
 
 
 def test_static_memory_gives_ids_back_only_to_bodies_that_stand_still():
