@@ -216,19 +216,28 @@ def along_epipolar_lines(points: np.ndarray, residual: np.ndarray, node_ids: np.
         is below 1, ``OWN`` where the median px off the line is above ``OWN_PX``, else
         ``OFF``.
     """
+    return {i: how for i, (how, _) in _judge(points, residual, node_ids, ids, e).items()}
+
+
+def _judge(points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
+           ids: Iterable[int], e: np.ndarray) -> dict[int, tuple[str, float]]:
+    """:func:`along_epipolar_lines`, with the median px moved by each id's nodes that
+    moved more than ``ALONG_MIN_PX``: id -> (how, px)."""
     size = np.linalg.norm(residual, axis=1)
     fast = size > ALONG_MIN_PX
     if not fast.any():
         return {}
+    size = size[fast]
     off = epipolar_distance(points[fast], residual[fast], e)[0]
-    ratio = off / np.maximum(ALONG_SINE * size[fast], ALONG_PX)
+    ratio = off / np.maximum(ALONG_SINE * size, ALONG_PX)
     owner = node_ids[fast]
     out = {}
     for i in ids:
         mine = owner == i
         if np.count_nonzero(mine) >= ALONG_MIN_NODES:
             out[int(i)] = (ALONG if np.median(ratio[mine]) < 1.0
-                           else OWN if np.median(off[mine]) > OWN_PX else OFF)
+                           else OWN if np.median(off[mine]) > OWN_PX else OFF,
+                           float(np.median(size[mine])))
     return out
 
 
@@ -258,10 +267,8 @@ class ParallaxOnly:
                 moving: Iterable[int], e: np.ndarray) -> None:
         """Count this frame for the MotionBits ``moving`` (arguments as
         :func:`along_epipolar_lines`)."""
-        size = np.linalg.norm(residual, axis=1)
-        for i, how in along_epipolar_lines(points, residual, node_ids, moving, e).items():
-            self._speeds.setdefault(i, []).append(
-                float(np.median(size[(node_ids == i) & (size > ALONG_MIN_PX)])))
+        for i, (how, speed) in _judge(points, residual, node_ids, moving, e).items():
+            self._speeds.setdefault(i, []).append(speed)
             self._lined[i] = self._lined.get(i, 0) + (how == ALONG)
             if how == OWN:
                 self._own.add(i)
