@@ -11,7 +11,9 @@ mask's, are the body's too -- unless they run out to the box's frame where it is
 image's border that the mask reaches, or add more than ``BORDER_GROWTH`` times the mask
 where they reach it (a mark spilled onto a plain table would take the table as far as the
 box goes; the cut is then tried once more in a box twice as far out, for a mark on a
-small part of its body, such as a block's top face whose sides run past the first box).
+small part of its body, such as a block's top face whose sides run past the first box) --
+nor, for a mark at rest, where they add more than ``GROWTH`` times the mark (the mark a
+cast shadow left on the table, round 64).
 The marks too small to show are completed last (:func:`complete_small_marks`), where no
 other mark is, and shown only if their body then covers the smallest shown size; one that
 touches another mark is the rest of that mark's body and joins it. The segmenter's state
@@ -83,7 +85,7 @@ __all__ = ["complete_masks", "complete_small_marks", "CutMemory", "FirstLook",
            "FIRST_SEEN_KNOWN", "FIRST_SEEN_CHANGED", "UNCOVERED_KNOWN", "UNCOVERED_CONTRAST",
            "UNCOVERED_IOU", "TRIM_SHARE", "TRIM_OPEN", "SHADOW_RIM", "SHOWN_CORRELATION",
            "SHOWN_SHARE", "TEXTURE_WINDOW", "SHADOW_TEXTURE", "TOUCH_SHARE",
-           "BORDER_MARK_SHARE", "BORDER_GROWTH"]
+           "BORDER_MARK_SHARE", "BORDER_GROWTH", "GROWTH"]
 
 #: A mark at rest that reaches the image's border is completed when it covers at most
 #: this share of the image (a body the view cuts; an arm or hand entering the view is
@@ -92,6 +94,14 @@ BORDER_MARK_SHARE = 0.01
 #: ... and a cut that reaches the image's border adds at most this many times the mark
 #: (a mark beside the border took the table along it, 126,000 px, without it).
 BORDER_GROWTH = 3
+#: A cut adds at most this many times a mark at rest: a body's faces that its motion did not
+#: mark, not the table around the mark a cast shadow left there (19,600 px around 2,900,
+#: held33 seed 607 scene_0007). At the last frames of 120 moving-camera pick-and-place
+#: scenes no cut of a mark at rest that added over 4 times it took a body's pixels, but
+#: with 4 a robot's cylinder, grown from its top face at an earlier frame, was lost (round
+#: 64). A moving mark's cut (an arm and the block it carries) and a small mark's (a piece
+#: of a body set down, grown to its body) are not bounded so.
+GROWTH = 6
 
 #: The box GrabCut works in: the mask's box grown by this share of its longer side
 #: (+ ``COMPLETION_MARGIN`` px); the box's outermost ``COMPLETION_FRAME`` px are the
@@ -202,7 +212,7 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
                    memory: CutMemory | None = None,
                    first_look: FirstLook | None = None,
                    labels: Collection[int] | None = None,
-                   shadow: np.ndarray | None = None) -> np.ndarray:
+                   shadow: np.ndarray | None = None, growth: float = GROWTH) -> np.ndarray:
     """Grow each mask over the rest of its body (GrabCut): every mask at rest that reaches
     no image border or covers at most ``BORDER_MARK_SHARE`` of the image, a moving one
     that reaches no image border where its outline stops inside its body.
@@ -225,6 +235,8 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
             pixels that show the texture ``first_look`` saw there (nor the thin rim left
             around them, ``SHADOW_RIM``) and no cut adds them; None (or no
             ``first_look``): no such test.
+        growth: a cut adds at most this many times a mask at rest (``GROWTH``; np.inf: no
+            bound but the others).
 
     Returns:
         (H, W) int32 label map: each such mask plus the background pixels its body's
@@ -256,12 +268,14 @@ def complete_masks(label_map: np.ndarray, rgb: np.ndarray, moving: Collection[in
         if cut is None or cut.followed:
             carried = None if cut is None else _unshadowed(cut, label_map, label, rgb,
                                                            first_look)
+            bound = np.inf if label in moving else growth
             cut = _cut(label_map, label, box, rgb, out, first_look, trim=label not in moving,
-                       shadow=shadow)
+                       shadow=shadow, growth=bound)
             if carried is not None and (cut is None or np.count_nonzero(cut.body)
                                         < FOLLOW_LARGER * np.count_nonzero(carried.body)):
                 cut = _cut(label_map, label, box, rgb, out, first_look,
-                           trim=label not in moving, shadow=shadow, prior=carried) or carried
+                           trim=label not in moving, shadow=shadow, prior=carried,
+                           growth=bound) or carried
         if cut is None:
             continue
         if label not in moving:
@@ -310,7 +324,7 @@ def complete_small_marks(pieces: np.ndarray, label_map: np.ndarray, rgb: np.ndar
     both = label_map.copy()
     both[put] = pieces[put]
     out = complete_masks(both, rgb, moving, gradient, None, first_look,
-                         labels={int(label) for label in hidden})
+                         labels={int(label) for label in hidden}, growth=np.inf)
     area = label_areas(out)
     out = drop_labels(out, [label for label in hidden
                             if label >= area.size or area[label] < min_area])
@@ -351,7 +365,8 @@ class _Cut:
 
 def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.ndarray,
          out: np.ndarray, first_look: FirstLook | None = None, trim: bool = False,
-         shadow: np.ndarray | None = None, prior: _Cut | None = None) -> _Cut | None:
+         shadow: np.ndarray | None = None, prior: _Cut | None = None,
+         growth: float = np.inf) -> _Cut | None:
     """The body's rest that GrabCut finds for mask ``label`` (its box ``box``) in a box
     around it, where no mask of ``out`` is yet -- starting on the body's side, with the
     mask, from what looks otherwise than ``first_look`` saw there -- less, if ``trim``,
@@ -359,12 +374,13 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
     ``shadow`` ((H, W) bool or None); None where it changes nothing. A cut that runs out
     to its box's frame is tried once more in a box ``WIDER`` times as far out: a top
     face's mark may be a small part of its body. A ``prior`` cut (one carried along a
-    moving camera's model) puts its body on the body's side too."""
+    moving camera's model) puts its body on the body's side too. A cut that adds more
+    than ``growth`` times the mask is not taken."""
     side = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
     for share in (COMPLETION_REACH, WIDER * COMPLETION_REACH):
         cut, ran_out = _cut_within(label_map, label, grow_box(
             box, int(share * side) + COMPLETION_MARGIN, label_map.shape), rgb, out, first_look,
-            trim, shadow, prior)
+            trim, shadow, prior, growth)
         if not ran_out:
             return cut
     return None
@@ -373,7 +389,8 @@ def _cut(label_map: np.ndarray, label: int, box: tuple[slice, slice], rgb: np.nd
 def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
                 rgb: np.ndarray, out: np.ndarray, first_look: FirstLook | None,
                 trim: bool = False, shadow: np.ndarray | None = None,
-                prior: _Cut | None = None) -> tuple[_Cut | None, bool]:
+                prior: _Cut | None = None, growth: float = np.inf
+                ) -> tuple[_Cut | None, bool]:
     """:func:`_cut` in the image box ``around``: (the cut or None, whether it ran out to
     the box's frame)."""
     rows, cols = around
@@ -426,8 +443,11 @@ def _cut_within(label_map: np.ndarray, label: int, around: tuple[slice, slice],
     # or the box was too small for it
     if _reaches_frame(new, edge):
         return None, True
-    # one that reaches the image's border is a body the view cuts, not the table along it
-    if _reaches_frame(new) and np.count_nonzero(new) > BORDER_GROWTH * np.count_nonzero(mask):
+    # one that reaches the image's border is a body the view cuts, not the table along it;
+    # one that adds many times the mark took the table or wall around it
+    added = np.count_nonzero(new)
+    if added > growth * np.count_nonzero(mask) or (
+            _reaches_frame(new) and added > BORDER_GROWTH * np.count_nonzero(mask)):
         return None, False
     return _Cut(rows, cols, mask, rgb[rows, cols].copy(), kept | new), False
 
