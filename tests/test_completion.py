@@ -28,6 +28,24 @@ def _scene() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rgb, body, labels
 
 
+def _cuts_take(monkeypatch, region: np.ndarray) -> None:
+    """Make every GrabCut give the body ``region`` ((240, 320) bool, read at each cut: the
+    caller may change it) within the cut's box."""
+    box = {}
+
+    def cut_takes_the_region(image, trimap):
+        return region[box["around"]].copy()
+
+    real = completion._cut_within
+
+    def within(label_map, label, around, *args):
+        box["around"] = around
+        return real(label_map, label, around, *args)
+
+    monkeypatch.setattr(completion, "_grab_cut", cut_takes_the_region)
+    monkeypatch.setattr(completion, "_cut_within", within)
+
+
 def _first_look(rgb: np.ndarray, unseen: tuple[slice, slice]) -> FirstLook:
     """The (240, 320, 3) ``rgb`` first seen everywhere but in the box ``unseen``."""
     first = FirstLook((240, 320), covered=20.0, tolerance=10.0)
@@ -154,20 +172,7 @@ def test_a_cut_along_the_image_s_border_takes_no_more_than_its_share(monkeypatch
     labels[239, 145:155] = 3  # ... and a sliver on it
     strip = np.zeros((240, 320), bool)
     strip[200:240, 40:280] = True  # the mark and the table along the border
-
-    box = {}
-
-    def cut_takes_the_strip(image, trimap):
-        return strip[box["around"]].copy()
-
-    real = completion._cut_within
-
-    def within(label_map, label, around, *args):
-        box["around"] = around
-        return real(label_map, label, around, *args)
-
-    monkeypatch.setattr(completion, "_grab_cut", cut_takes_the_strip)
-    monkeypatch.setattr(completion, "_cut_within", within)
+    _cuts_take(monkeypatch, strip)
     out = complete_masks(labels, rgb)
     assert (out == labels).all()
     strip[:] = False
@@ -728,19 +733,7 @@ def test_a_cut_that_adds_many_times_a_mark_at_rest_is_not_taken(monkeypatch):
     labels = np.zeros((240, 320), np.int32)
     labels[100:120, 150:170] = 3  # 400 px, far from the border
     region = np.zeros((240, 320), bool)
-    box = {}
-
-    def cut_takes_the_region(image, trimap):
-        return region[box["around"]].copy()
-
-    real = completion._cut_within
-
-    def within(label_map, label, around, *args):
-        box["around"] = around
-        return real(label_map, label, around, *args)
-
-    monkeypatch.setattr(completion, "_grab_cut", cut_takes_the_region)
-    monkeypatch.setattr(completion, "_cut_within", within)
+    _cuts_take(monkeypatch, region)
     region[82:138, 132:188] = True  # 3,136 px: 2,736 added
     assert (complete_masks(labels, rgb) == labels).all()
     assert completion.GROWTH * 400 < 2736
