@@ -258,9 +258,8 @@ class ParallaxOnly:
     """
 
     def __init__(self) -> None:
-        # id -> its median px moved at each measured frame, and how many were along the lines
-        self._speeds: dict[int, list[float]] = {}
-        self._lined: dict[int, int] = {}
+        # id -> (median px moved, whether along the lines) at each of its measured frames
+        self._frames: dict[int, list[tuple[float, bool]]] = {}
         self._own: set[int] = set()  # ids seen moving by themselves (``OWN``) at some frame
 
     def observe(self, points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
@@ -268,8 +267,7 @@ class ParallaxOnly:
         """Count this frame for the MotionBits ``moving`` (arguments as
         :func:`along_epipolar_lines`)."""
         for i, (how, speed) in _judge(points, residual, node_ids, moving, e).items():
-            self._speeds.setdefault(i, []).append(speed)
-            self._lined[i] = self._lined.get(i, 0) + (how == ALONG)
+            self._frames.setdefault(i, []).append((speed, how == ALONG))
             if how == OWN:
                 self._own.add(i)
 
@@ -286,9 +284,11 @@ class ParallaxOnly:
         ``JUMP`` times as fast as at their median measured frame."""
         out = set()
         for i in present:
-            speeds, lined = self._speeds.get(int(i), []), self._lined.get(int(i), 0)
-            if (lined >= PARALLAX_FRAMES and len(speeds) - lined <= lined // OFF_LINES_EVERY
-                    and int(i) not in self._own
-                    and max(speeds) <= JUMP * float(np.median(speeds))):  # no jump
-                out.add(int(i))
+            frames = self._frames.get(int(i), [])
+            lined = sum(along for _, along in frames)
+            if (lined >= PARALLAX_FRAMES and len(frames) - lined <= lined // OFF_LINES_EVERY
+                    and int(i) not in self._own):
+                speeds = [speed for speed, _ in frames]
+                if max(speeds) <= JUMP * float(np.median(speeds)):  # no jump
+                    out.add(int(i))
         return out
