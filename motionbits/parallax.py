@@ -28,6 +28,7 @@ from motionbits.boxes import pieces_holding
 from motionbits.flow import pixel_grid
 
 __all__ = ["epipolar_distance", "fit_epipole", "parallax_field", "along_epipolar_lines",
+           "moves_along_lines",
            "ParallaxOnly", "ALONG_MIN_PX", "ALONG_MIN_NODES", "ALONG_SINE", "ALONG_PX",
            "OWN_PX", "JUMP", "PARALLAX_FRAMES", "OFF_LINES_EVERY", "ALONG", "OFF",
            "OWN"]
@@ -196,6 +197,18 @@ def parallax_field(residual: np.ndarray, e: np.ndarray, region: np.ndarray, *,
     smooth *= cv2.resize(np.minimum(weight / 0.05, 1.0), (w, h))[..., None]  # no support: 0
     return np.where(fits[..., None], own,
                     np.where(region[..., None], smooth, 0)).astype(np.float32)
+
+
+def moves_along_lines(flow: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the pixels whose motion relative to the static world's model lies on
+    their epipolar line of ``e`` ((3,) homogeneous), as :func:`along_epipolar_lines`
+    judges a MotionBit's nodes: off it by less than ``ALONG_SINE`` x the px moved or
+    ``ALONG_PX`` -- a static body's parallax (``flow``: (H, W, 2) float32 backward flow
+    relative to that model)."""
+    h, w = flow.shape[:2]
+    xs, ys = pixel_grid(h, w)
+    dist, _ = epipolar_distance(np.stack([xs, ys], -1), flow, e)
+    return dist < np.maximum(ALONG_SINE * cv2.magnitude(flow[..., 0], flow[..., 1]), ALONG_PX)
 
 
 def along_epipolar_lines(points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,

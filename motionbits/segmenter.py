@@ -49,7 +49,7 @@ from motionbits.merging import (MIN_MOVED, MotionBitGroups, apply_joins, drop_se
 from motionbits.mcl import cluster_components
 from motionbits.nodes import NodeGrid, binary_fill_holes, sample_bilinear
 from motionbits.numbering import ShownNumbers, by_number
-from motionbits.parallax import ParallaxOnly
+from motionbits.parallax import ParallaxOnly, moves_along_lines
 from motionbits.propagation import grid_seeds, propagate_components
 from motionbits.records import (
     MotionBit, MotionBitsResult, MotionSpans, build_result, group_map, moving_ids, twist_sources)
@@ -536,7 +536,8 @@ class MotionBitsSegmenter:
             # the stream's memories brought up to date on the second thread, while this one
             # makes the masks shown up to their completion (the first step that reads them)
             remembered = self._helper.submit(self._remember, cur, cur_g, change, labels,
-                                             standing, reliable)
+                                             standing, reliable,
+                                             None if epipole is None else (flow_m, epipole))
             # the twists reported: each moving MotionBit's motion refined on its own pixels
             # (flow reads rotations low) -- those a shown MotionBit reports; on the second
             # thread after the memories, unless a flat link's test asks for them first
@@ -626,18 +627,25 @@ class MotionBitsSegmenter:
         return result
 
     def _remember(self, cur: np.ndarray, cur_g: np.ndarray, change: np.ndarray,
-                  labels: np.ndarray, standing: np.ndarray, reliable: np.ndarray
+                  labels: np.ndarray, standing: np.ndarray, reliable: np.ndarray,
+                  parallax: tuple[np.ndarray, np.ndarray] | None
                   ) -> tuple[tuple[tuple[slice, slice], np.ndarray] | None, np.ndarray | None]:
         """Bring the static world's memory up to this frame (and the arrivals' and the
         first look's), given where the frame stands still (``standing``, (h, w) bool).
-        Returns the cast shadows the memory saw before it moved on
-        (:func:`motionbits.shadows.cast_shadows`) and the pixels it took in (None: the
-        memory is off). Writes only those memories."""
+        ``parallax``: the (h, w, 2) flow relative to the static world's model and the (3,)
+        epipole of its parallax (None: none found): what moves along its epipolar line is
+        not seen moving by the arrivals (a tall static body under a moving camera, read
+        through its parallax, is no body that arrived). Returns the cast shadows the
+        memory saw before it moved on (:func:`motionbits.shadows.cast_shadows`) and the
+        pixels it took in (None: the memory is off). Writes only those memories."""
         # before the memory moves on
         shadows = cast_shadows(self._memory, cur, labels, self._first_look)
         calm = self._memory.update(cur, cur_g, change, standing, labels)
         if calm is not None:
-            self._arrivals.update(cur, calm, labels, reliable & ~standing)
+            moved = reliable & ~standing
+            if parallax is not None:
+                moved &= ~moves_along_lines(*parallax)
+            self._arrivals.update(cur, calm, labels, moved)
             self._first_look.update(cur, calm, labels)
         return shadows, calm
 
