@@ -206,9 +206,15 @@ def moves_along_lines(flow: np.ndarray, e: np.ndarray) -> np.ndarray:
     ``ALONG_PX`` -- a static body's parallax (``flow``: (H, W, 2) float32 backward flow
     relative to that model)."""
     h, w = flow.shape[:2]
-    xs, ys = pixel_grid(h, w)
-    dist, _ = epipolar_distance(np.stack([xs, ys], -1), flow, e)
-    return dist < np.maximum(ALONG_SINE * cv2.magnitude(flow[..., 0], flow[..., 1]), ALONG_PX)
+    e = np.asarray(e, np.float64) / np.linalg.norm(e)
+    # the line through p = (x, y, 1) and e is (lx, ly, .) with lx a function of y and ly
+    # of x alone (:func:`epipolar_distance`): the distance test is squared and broadcast
+    lx = (np.arange(h) * e[2] - e[1]).astype(np.float32)[:, None]
+    ly = (e[0] - np.arange(w) * e[2]).astype(np.float32)[None, :]
+    fx, fy = flow[..., 0], flow[..., 1]
+    across = lx * fx + ly * fy  # px off the line times the line's norm
+    tolerance = np.maximum(ALONG_SINE ** 2 * (fx * fx + fy * fy), np.float32(ALONG_PX ** 2))
+    return across * across <= tolerance * (lx * lx + ly * ly)
 
 
 def along_epipolar_lines(points: np.ndarray, residual: np.ndarray, node_ids: np.ndarray,
