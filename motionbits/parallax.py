@@ -204,9 +204,17 @@ def moves_along_lines(flow: np.ndarray, e: np.ndarray) -> np.ndarray:
     their epipolar line of ``e`` ((3,) homogeneous), as :func:`along_epipolar_lines`
     judges a MotionBit's nodes: off it by less than ``ALONG_SINE`` x the px moved or
     ``ALONG_PX`` -- a static body's parallax (``flow``: (H, W, 2) float32 backward flow
-    relative to that model)."""
+    relative to that model).
+
+    Raises:
+        ValueError: ``e`` is not a non-zero 3-vector.
+    """
+    e = np.asarray(e, np.float64)
+    norm = np.linalg.norm(e) if e.shape == (3,) else 0.0
+    if not np.isfinite(norm) or norm == 0.0:
+        raise ValueError(f"the epipole must be a finite, non-zero homogeneous 3-vector, got {e!r}")
     h, w = flow.shape[:2]
-    e = np.asarray(e, np.float64) / np.linalg.norm(e)
+    e = e / norm
     # the line through p = (x, y, 1) and e is (lx, ly, .) with lx a function of y and ly
     # of x alone (:func:`epipolar_distance`): the distance test is squared and broadcast
     lx = (np.arange(h) * e[2] - e[1]).astype(np.float32)[:, None]

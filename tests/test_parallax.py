@@ -1,6 +1,7 @@
 """Plane + parallax (motionbits/parallax.py, camera.compensate_camera): a translating camera."""
 
 import numpy as np
+import pytest
 from conftest import best_iou
 
 from motionbits.camera import compensate_camera
@@ -235,6 +236,9 @@ def test_moves_along_lines_takes_parallax_and_leaves_motion_across_the_lines():
     tilted = (3.0 * (c * line + s * normal)).astype(np.float32)
     assert not moves_along_lines(tilted, e)[far].any()
     assert not moves_along_lines((2.0 * normal).astype(np.float32), e)[far].any()
+    for bad in (np.zeros(3), np.array([1.0, np.nan, 1.0]), np.array([1.0, 2.0])):
+        with pytest.raises(ValueError, match="epipole"):
+            moves_along_lines(tilted, bad)
 
 
 def test_a_block_pushed_along_its_epipolar_lines_is_a_motionbit():
