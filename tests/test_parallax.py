@@ -337,18 +337,22 @@ def test_one_frame_off_the_lines_in_five_does_not_make_parallax_a_motion():
     assert parallax.ids([1, 2]) == {1}
 
 
+def _two_bodies_nodes(seed: int):
+    """40 random nodes, 20 of MotionBit 1 then 20 of MotionBit 2, the epipole E, and at
+    each node the unit direction of its epipolar line and the normal to it."""
+    p = np.random.default_rng(seed).uniform([0, 0], [W, H], (40, 2))
+    line = (p - E) / np.linalg.norm(p - E, axis=1, keepdims=True)
+    normal = np.stack([-line[:, 1], line[:, 0]], 1)
+    return p, np.array([*E, 1.0]), np.repeat([1, 2], 20), line, normal
+
+
 def test_a_slow_static_body_a_flow_error_off_its_lines_at_two_frames_is_parallax_only():
     """A tall static box under an orbiting camera (held36 seed-661 scene_0002): 2-3.5 px of
     parallax a frame, along its lines within 0.05-0.3 px at seven frames and 0.34-0.4 px
     off them at two -- DIS's error at that speed, not a motion of its own. It is parallax
-    only. A block nudged as slowly but 1.2 px across its lines (20 degrees) at two frames
-    of nine moved by itself."""
-    rng = np.random.default_rng(6)
-    p = rng.uniform([0, 0], [W, H], (40, 2))
-    e = np.array([*E, 1.0])
-    node_ids = np.repeat([1, 2], 20)
-    line = (p - E) / np.linalg.norm(p - E, axis=1, keepdims=True)
-    normal = np.stack([-line[:, 1], line[:, 0]], 1)
+    only. A block nudged as slowly but 1.2 px across its lines at two frames of nine moved
+    by itself."""
+    p, e, node_ids, line, normal = _two_bodies_nodes(6)
     speeds = [2.7, 2.9, 3.4, 2.9, 3.0, 2.6, 2.1, 2.0, 1.1]  # px a frame, as measured
     offs = [0.21, 0.40, 0.34, 0.20, 0.13, 0.17, 0.08, 0.30, 0.04]  # px off the lines
     parallax = ParallaxOnly()
@@ -368,12 +372,7 @@ def test_parallax_within_a_flow_error_of_the_lines_and_a_motion_of_its_own():
     over 3 degrees at that speed) moves along them; a body knocked 5 px across its lines at
     one frame, then standing tall and moving along them through parallax, moved by itself
     and is never parallax only, however many frames follow."""
-    rng = np.random.default_rng(5)
-    p = rng.uniform([0, 0], [W, H], (40, 2))
-    e = np.array([*E, 1.0])
-    node_ids = np.repeat([1, 2], 20)
-    line = (p - E) / np.linalg.norm(p - E, axis=1, keepdims=True)
-    normal = np.stack([-line[:, 1], line[:, 0]], 1)
+    p, e, node_ids, line, normal = _two_bodies_nodes(5)
     slow = 1.5 * line + 0.2 * normal  # 7.6 degrees off, 0.2 px
     assert ALONG_MIN_PX < 1.5 and 0.2 < ALONG_PX
     parallax = ParallaxOnly()
